@@ -1,0 +1,37 @@
+// The feature tensor Θ (T, J, 9) that every model sees (NECromancer 4.1).
+//
+//   Features f = encode_features(skeleton, motion);   // f.at(t, j, k)
+//   Motion back = decode_features(skeleton, f);       // equal up to float rounding
+//
+// Root (j = 0): [Δx, Δy, Δz, rot6D of the global root orientation], where Δ is
+// the root displacement from the previous frame expressed in the current
+// frame's heading (yaw-only) frame. Frame 0 holds (0, root height, 0); the
+// frame-0 ground position (x, z) is kept in `start_xz` so the inverse is exact.
+// Other joints: [0, 0, 0, rot6D of the local rotation].
+#pragma once
+
+#include "nec/motion/motion.h"
+
+#include <array>
+#include <vector>
+
+namespace nec {
+
+constexpr int kFeatureSize = 9;
+
+struct Features {
+  int frame_count = 0;
+  int joint_count = 0;
+  double fps = 30.0;
+  std::array<double, 2> start_xz{0.0, 0.0};  // root ground position at frame 0
+  std::vector<float> data;                    // (T, J, 9)
+
+  float& at(int frame, int joint, int k) { return data[(static_cast<size_t>(frame) * joint_count + joint) * kFeatureSize + k]; }
+  float at(int frame, int joint, int k) const { return data[(static_cast<size_t>(frame) * joint_count + joint) * kFeatureSize + k]; }
+};
+
+Features encode_features(const Skeleton& skeleton, const Motion& motion);
+// Non-root joints get the skeleton's rest offsets as translations.
+Motion decode_features(const Skeleton& skeleton, const Features& features);
+
+}  // namespace nec

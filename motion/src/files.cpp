@@ -1,0 +1,60 @@
+// File reading and atomic writing.
+#include "nec/motion/files.h"
+
+#include "nec/motion/error.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <stdexcept>
+
+namespace nec {
+
+std::string read_file(const std::string& path, size_t max_bytes) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path, 0, "is a directory, not a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw InputError(path, 0, "cannot determine the file size");
+  if (static_cast<size_t>(size) > max_bytes) {
+    throw InputError(path, 0, "file is " + std::to_string(size) + " bytes, more than the limit of " +
+                                  std::to_string(max_bytes));
+  }
+  std::string data(static_cast<size_t>(size), '\0');
+  in.seekg(0);
+  in.read(data.data(), size);
+  if (!in) throw InputError(path, 0, "read failed");
+  return data;
+}
+
+void write_file_atomic(const std::string& path, std::string_view contents) {
+  const std::filesystem::path target(path);
+  std::random_device entropy;
+  const std::filesystem::path temp =
+      target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(entropy()));
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error(path + ": cannot write: " + std::strerror(errno));
+    out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
+    out.flush();
+    if (!out) {
+      std::error_code ignored;
+      std::filesystem::remove(temp, ignored);
+      throw std::runtime_error(path + ": write failed: " + std::strerror(errno));
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(temp, target, ec);
+  if (ec) {
+    std::error_code ignored;
+    std::filesystem::remove(temp, ignored);
+    throw std::runtime_error(path + ": cannot move the written file into place: " + ec.message());
+  }
+}
+
+}  // namespace nec

@@ -1,0 +1,77 @@
+// Forward kinematics over all frames.
+#include "nec/motion/kinematics.h"
+
+#include <stdexcept>
+
+namespace nec {
+namespace {
+
+void check_sizes(const Skeleton& skeleton, const Motion& motion) {
+  if (motion.joint_count != skeleton.joint_count()) {
+    throw std::invalid_argument("forward_kinematics: motion has " + std::to_string(motion.joint_count) +
+                                " joints, skeleton has " + std::to_string(skeleton.joint_count()));
+  }
+}
+
+}  // namespace
+
+Pose forward_kinematics(const Skeleton& skeleton, const Motion& motion) {
+  check_sizes(skeleton, motion);
+  Pose pose;
+  pose.frame_count = motion.frame_count;
+  pose.joint_count = motion.joint_count;
+  pose.rotations.resize(motion.rotations.size());
+  pose.positions.resize(motion.rotations.size());
+  const int joints = motion.joint_count;
+  const int* parents = skeleton.parents.data();
+  for (int t = 0; t < motion.frame_count; ++t) {
+    const size_t base = static_cast<size_t>(t) * joints;
+    const Quat* local = motion.rotations.data() + base;
+    const Vec3* translation = motion.translations.data() + base;
+    Quat* global = pose.rotations.data() + base;
+    Vec3* position = pose.positions.data() + base;
+    global[0] = local[0];
+    position[0] = translation[0];
+    for (int j = 1; j < joints; ++j) {
+      const int p = parents[j];
+      global[j] = global[p] * local[j];
+      position[j] = position[p] + global[p] * translation[j];
+    }
+  }
+  return pose;
+}
+
+void joint_positions(const Skeleton& skeleton, const Motion& motion, std::vector<Vec3>& positions) {
+  check_sizes(skeleton, motion);
+  const int joints = motion.joint_count;
+  positions.resize(motion.rotations.size());
+  std::vector<Quat> global(joints);
+  const int* parents = skeleton.parents.data();
+  for (int t = 0; t < motion.frame_count; ++t) {
+    const size_t base = static_cast<size_t>(t) * joints;
+    const Quat* local = motion.rotations.data() + base;
+    const Vec3* translation = motion.translations.data() + base;
+    Vec3* position = positions.data() + base;
+    global[0] = local[0];
+    position[0] = translation[0];
+    for (int j = 1; j < joints; ++j) {
+      const int p = parents[j];
+      global[j] = global[p] * local[j];
+      position[j] = position[p] + global[p] * translation[j];
+    }
+  }
+}
+
+std::vector<Vec3> end_site_positions(const Skeleton& skeleton, const Pose& pose) {
+  const size_t sites = skeleton.end_sites.size();
+  std::vector<Vec3> out(static_cast<size_t>(pose.frame_count) * sites);
+  for (int t = 0; t < pose.frame_count; ++t) {
+    for (size_t e = 0; e < sites; ++e) {
+      const EndSite& site = skeleton.end_sites[e];
+      out[t * sites + e] = pose.position(t, site.parent) + pose.rotation(t, site.parent) * site.offset;
+    }
+  }
+  return out;
+}
+
+}  // namespace nec

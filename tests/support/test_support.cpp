@@ -1,0 +1,66 @@
+// Shared helpers for the tests.
+#include "test_support.h"
+
+#include <algorithm>
+#include <filesystem>
+
+namespace nec::testing {
+
+std::string cmu_bvh_dir() { return NEC_CMU_BVH_DIR; }
+
+std::string shared_data_dir() {
+  const std::string dir = NEC_SHARED_DATA_DIR;
+  return std::filesystem::is_directory(dir) ? dir : std::string();
+}
+
+std::vector<std::string> bvh_files_under(const std::string& dir) {
+  std::vector<std::string> out;
+  if (dir.empty() || !std::filesystem::is_directory(dir)) return out;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir)) {
+    if (entry.is_regular_file() && entry.path().extension() == ".bvh") out.push_back(entry.path().string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+Quat random_rotation(std::mt19937& rng) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Quat q(normal(rng), normal(rng), normal(rng), normal(rng));
+  return q.normalized();
+}
+
+Skeleton random_skeleton(std::mt19937& rng, int joints) {
+  std::uniform_real_distribution<double> offset(-1.0, 1.0);
+  std::uniform_int_distribution<int> order(0, 5);
+  Skeleton s;
+  s.add_joint("root", -1, Vec3::Zero(), ChannelLayout::position_rotations(static_cast<EulerOrder>(order(rng))));
+  for (int j = 1; j < joints; ++j) {
+    std::uniform_int_distribution<int> parent(0, j - 1);
+    s.add_joint("joint" + std::to_string(j), parent(rng), Vec3(offset(rng), offset(rng), offset(rng)),
+                ChannelLayout::rotations(static_cast<EulerOrder>(order(rng))));
+  }
+  for (int leaf : s.leaves()) s.end_sites.push_back({leaf, Vec3(offset(rng), offset(rng), offset(rng))});
+  // List joints as a BVH file would, so that write/read keeps indices.
+  Clip clip{s, Motion::rest(s, 0, 30.0), {}};
+  permute_joints(clip, s.depth_first_order());
+  return clip.skeleton;
+}
+
+Motion random_motion(std::mt19937& rng, const Skeleton& skeleton, int frames) {
+  std::uniform_real_distribution<double> position(-2.0, 2.0);
+  Motion m = Motion::rest(skeleton, frames, 30.0);
+  for (int t = 0; t < frames; ++t) {
+    for (int j = 0; j < skeleton.joint_count(); ++j) m.rotation(t, j) = random_rotation(rng);
+    m.translation(t, 0) = Vec3(position(rng), position(rng), position(rng));
+  }
+  return m;
+}
+
+double max_position_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
+  double worst = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
+  return worst;
+}
+
+}  // namespace nec::testing

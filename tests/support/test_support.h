@@ -1,0 +1,28 @@
+// Shared helpers for the tests: random rotations and trees, data paths.
+#pragma once
+
+#include "nec/motion/motion.h"
+
+#include <random>
+#include <string>
+#include <vector>
+
+namespace nec::testing {
+
+// Directory of the Debian CMU BVH files (assimp-testmodels).
+std::string cmu_bvh_dir();
+// ../shared/data, or "" when absent.
+std::string shared_data_dir();
+// All *.bvh below `dir`, sorted.
+std::vector<std::string> bvh_files_under(const std::string& dir);
+
+Quat random_rotation(std::mt19937& rng);
+// A random tree of `joints` joints with random offsets and channel layouts.
+Skeleton random_skeleton(std::mt19937& rng, int joints);
+// Random local rotations (and root translation) for every frame.
+Motion random_motion(std::mt19937& rng, const Skeleton& skeleton, int frames);
+
+// Largest distance between corresponding positions of two pose sets.
+double max_position_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b);
+
+}  // namespace nec::testing

@@ -1,0 +1,227 @@
+// BVH reader and writer: messy-but-valid input, bad input, round trips on real files.
+#include "nec/motion/bvh.h"
+#include "nec/motion/error.h"
+#include "nec/motion/kinematics.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+namespace nec {
+namespace {
+
+constexpr const char* kTwoJoints =
+    "HIERARCHY\n"
+    "ROOT Hips\n"
+    "{\n"
+    "  OFFSET 0 0 0\n"
+    "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+    "  JOINT Spine\n"
+    "  {\n"
+    "    OFFSET 0 10 0\n"
+    "    CHANNELS 3 Zrotation Xrotation Yrotation\n"
+    "    End Site\n"
+    "    {\n"
+    "      OFFSET 0 5 0\n"
+    "    }\n"
+    "  }\n"
+    "}\n"
+    "MOTION\n"
+    "Frames: 2\n"
+    "Frame Time: 0.0333333\n"
+    "1 2 3 0 0 0 90 0 0\n"
+    "4 5 6 0 90 0 0 0 0\n";
+
+// Largest difference between two clips: positions relative to the diameter,
+// rotations as geodesic angle.
+struct ClipDifference {
+  double position = 0.0;  // max |FK position difference| / diameter
+  double rotation = 0.0;  // max geodesic angle (radians)
+};
+
+ClipDifference compare_clips(const Clip& a, const Clip& b) {
+  ClipDifference d;
+  const Pose pa = forward_kinematics(a.skeleton, a.motion);
+  const Pose pb = forward_kinematics(b.skeleton, b.motion);
+  const double scale = std::max(a.skeleton.diameter(), 1e-9);
+  d.position = testing::max_position_difference(pa.positions, pb.positions) / scale;
+  for (size_t i = 0; i < a.motion.rotations.size(); ++i) {
+    d.rotation = std::max(d.rotation, geodesic_distance(a.motion.rotations[i], b.motion.rotations[i]));
+  }
+  return d;
+}
+
+TEST(BvhReader, ReadsAMinimalFile) {
+  const Clip clip = parse_bvh(kTwoJoints, "two.bvh");
+  ASSERT_EQ(clip.skeleton.joint_count(), 2);
+  EXPECT_EQ(clip.skeleton.names[1], "Spine");
+  EXPECT_EQ(clip.skeleton.parents[1], 0);
+  ASSERT_EQ(clip.skeleton.end_sites.size(), 1u);
+  EXPECT_EQ(clip.motion.frame_count, 2);
+  EXPECT_NEAR(clip.motion.fps, 30.0, 1e-4);
+  EXPECT_NEAR((clip.motion.translation(1, 0) - Vec3(4, 5, 6)).norm(), 0.0, 1e-12);
+  // Frame 0: Spine rotated 90 degrees about Z, so its end site lies along -X.
+  const Pose pose = forward_kinematics(clip.skeleton, clip.motion);
+  const Vec3 tip = end_site_positions(clip.skeleton, pose)[0];
+  EXPECT_NEAR((tip - Vec3(1 - 5, 2 + 10, 3)).norm(), 0.0, 1e-9);
+}
+
+TEST(BvhReader, ToleratesMessyFormatting) {
+  const std::string messy =
+      "\xEF\xBB\xBFHIERARCHY\r\n"
+      "ROOT Bip01 Pelvis {\r\n"
+      "\tOFFSET\t0.0  0.0\t0.0\r\n"
+      "\tCHANNELS 6 Xposition Yposition Zposition Xrotation Yrotation Zrotation\r\n"
+      "\tJOINT Bip01 L Thigh\r\n"
+      "\t{\r\n"
+      "\t\tOFFSET 1e1 -2.5E-1 +3\r\n"
+      "\t\tCHANNELS 6 Xposition Yposition Zposition Yrotation Xrotation Zrotation\r\n"
+      "\t\tEnd Site\r\n"
+      "\t\t{\r\n"
+      "\t\t\tOFFSET 0 -1 0\r\n"
+      "\t\t}\r\n"
+      "\t}\r\n"
+      "}\r\n"
+      "\r\n"
+      "MOTION\r\n"
+      "Frames:\t1\r\n"
+      "Frame Time:\t.01\r\n"
+      "\r\n"
+      "0 1 2 3.5e1 0 0 10 -0.25 3 0 0 45\r\n"
+      "\r\n";
+  const Clip clip = parse_bvh(messy, "messy.bvh");
+  ASSERT_EQ(clip.skeleton.joint_count(), 2);
+  EXPECT_EQ(clip.skeleton.names[0], "Bip01 Pelvis");
+  EXPECT_EQ(clip.skeleton.names[1], "Bip01 L Thigh");
+  EXPECT_NEAR((clip.skeleton.offsets[1] - Vec3(10, -0.25, 3)).norm(), 0.0, 1e-12);
+  EXPECT_EQ(clip.skeleton.channels[1].euler_order(), EulerOrder::YXZ);
+  EXPECT_NEAR(clip.motion.fps, 100.0, 1e-9);
+  // Position channels on a non-root joint replace its offset.
+  EXPECT_NEAR((clip.motion.translation(0, 1) - Vec3(10, -0.25, 3)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(geodesic_distance(clip.motion.rotation(0, 1), axis_rotation(2, 45.0)), 0.0, 1e-9);
+}
+
+struct BadCase {
+  const char* label;
+  std::string text;
+  const char* expected;  // substring of the error message
+};
+
+std::string with_motion(const std::string& motion_part) {
+  std::string head = kTwoJoints;
+  return head.substr(0, head.find("MOTION")) + motion_part;
+}
+
+TEST(BvhReader, RejectsBadInputWithFileLineAndReason) {
+  const std::string good = kTwoJoints;
+  const std::vector<BadCase> cases = {
+      {"empty", "", "empty"},
+      {"garbage", std::string("\x7f\x45\x4c\x46\x02\x01\x00\x00", 8), "HIERARCHY"},
+      {"truncated hierarchy", good.substr(0, 60), "end of file"},
+      {"missing brace", "HIERARCHY\nROOT Hips\n  OFFSET 0 0 0\n", "expected '{'"},
+      {"unknown channel", "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 1 Wrotation\n}\n", "unknown channel"},
+      {"bad offset", "HIERARCHY\nROOT A\n{\nOFFSET 0 x 0\n}\n", "bad OFFSET"},
+      {"nan offset", "HIERARCHY\nROOT A\n{\nOFFSET 0 nan 0\n}\n", "bad OFFSET"},
+      {"too few values", with_motion("MOTION\nFrames: 1\nFrame Time: 0.1\n1 2 3" + std::string(20, ' ') + "\n"), "has 3 values, expected 9"},
+      {"too many values", with_motion("MOTION\nFrames: 1\nFrame Time: 0.1\n1 2 3 4 5 6 7 8 9 10\n"), "more than 9"},
+      {"inf value", with_motion("MOTION\nFrames: 1\nFrame Time: 0.1\n1 2 3 inf 5 6 7 8 9\n"), "bad number 'inf'"},
+      {"negative frames", with_motion("MOTION\nFrames: -3\nFrame Time: 0.1\n"), "bad frame count"},
+      {"absurd frames", with_motion("MOTION\nFrames: 1000000000\nFrame Time: 0.1\n0 0 0 0 0 0 0 0 0\n"),
+       "declares 1000000000 frames"},
+      {"truncated motion", with_motion("MOTION\nFrames: 3\nFrame Time: 0.1\n" + std::string(18 * 3, ' ') +
+                                       "0 0 0 0 0 0 0 0 0\n"), "file ends after 1 of 3"},
+      {"zero frame time", with_motion("MOTION\nFrames: 1\nFrame Time: 0\n0 0 0 0 0 0 0 0 0\n"), "bad frame time"},
+      {"duplicate names", "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nJOINT A\n{\nOFFSET 0 0 0\n}\n}\n", "duplicate joint"},
+  };
+  for (const BadCase& c : cases) {
+    try {
+      parse_bvh(c.text, "bad.bvh");
+      ADD_FAILURE() << c.label << ": no error";
+    } catch (const InputError& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("bad.bvh"), std::string::npos) << c.label << ": " << message;
+      EXPECT_NE(message.find(c.expected), std::string::npos) << c.label << ": " << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << c.label << ": one line expected";
+    }
+  }
+}
+
+TEST(BvhReader, ErrorNamesTheLine) {
+  const std::string text = with_motion("MOTION\nFrames: 2\nFrame Time: 0.1\n0 0 0 0 0 0 0 0 0\n0 0 0 0 oops 0 0 0 0\n");
+  try {
+    parse_bvh(text, "lines.bvh");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("lines.bvh:20:"), std::string::npos) << e.what();
+  }
+}
+
+TEST(BvhReader, IgnoresLinesAfterTheDeclaredFramesWithAWarning) {
+  const Clip clip = parse_bvh(with_motion("MOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0 0 0 0 0 0 0\n1 1 1 1 1 1 1 1 1\n"),
+                              "extra.bvh");
+  EXPECT_EQ(clip.motion.frame_count, 1);
+  ASSERT_EQ(clip.warnings.size(), 1u);
+  EXPECT_NE(clip.warnings[0].find("ignored 1 line"), std::string::npos);
+}
+
+TEST(BvhReader, MissingFileIsAnInputError) {
+  EXPECT_THROW(read_bvh("/nonexistent/dir/x.bvh"), InputError);
+}
+
+TEST(BvhRoundTrip, RandomSkeletonsAllOrders) {
+  std::mt19937 rng(19);
+  for (int trial = 0; trial < 10; ++trial) {
+    Clip clip;
+    clip.skeleton = testing::random_skeleton(rng, 3 + 5 * trial);
+    clip.motion = testing::random_motion(rng, clip.skeleton, 7);
+    const Clip back = parse_bvh(format_bvh(clip.skeleton, clip.motion), "random.bvh");
+    ASSERT_EQ(back.skeleton.names, clip.skeleton.names);
+    ASSERT_EQ(back.skeleton.parents, clip.skeleton.parents);
+    for (int j = 0; j < clip.skeleton.joint_count(); ++j) {
+      ASSERT_TRUE(back.skeleton.channels[j] == clip.skeleton.channels[j]);
+    }
+    const ClipDifference d = compare_clips(clip, back);
+    EXPECT_LT(d.position, 1e-6) << "trial " << trial;
+    EXPECT_LT(d.rotation, 1e-6) << "trial " << trial;
+  }
+}
+
+TEST(BvhRoundTrip, ChangingTheEulerOrderKeepsTheMotion) {
+  std::mt19937 rng(23);
+  Clip clip;
+  clip.skeleton = testing::random_skeleton(rng, 12);
+  clip.motion = testing::random_motion(rng, clip.skeleton, 5);
+  BvhWriteOptions options;
+  options.euler_order = EulerOrder::XZY;
+  const Clip back = parse_bvh(format_bvh(clip.skeleton, clip.motion, options), "order.bvh");
+  for (const ChannelLayout& layout : back.skeleton.channels) EXPECT_EQ(layout.euler_order(), EulerOrder::XZY);
+  const ClipDifference d = compare_clips(clip, back);
+  EXPECT_LT(d.rotation, 1e-6);
+  EXPECT_LT(d.position, 1e-6);
+}
+
+void expect_round_trip(const std::string& path) {
+  const Clip clip = read_bvh(path);
+  const Clip back = parse_bvh(format_bvh(clip.skeleton, clip.motion), path + " (rewritten)");
+  ASSERT_EQ(back.skeleton.names, clip.skeleton.names) << path;
+  ASSERT_EQ(back.motion.frame_count, clip.motion.frame_count) << path;
+  EXPECT_NEAR(back.motion.fps, clip.motion.fps, 1e-5 * clip.motion.fps) << path;
+  const ClipDifference d = compare_clips(clip, back);
+  EXPECT_LT(d.position, 1e-5) << path << ": relative position difference " << d.position;
+  EXPECT_LT(d.rotation, 1e-5) << path << ": rotation difference (rad) " << d.rotation;
+}
+
+TEST(BvhRoundTrip, DebianCmuFiles) {
+  const auto files = testing::bvh_files_under(testing::cmu_bvh_dir());
+  ASSERT_EQ(files.size(), 3u) << "run scripts/setup.sh (assimp-testmodels) first";
+  for (const auto& path : files) expect_round_trip(path);
+}
+
+TEST(BvhRoundTrip, SharedDataSample) {
+  const auto files = testing::bvh_files_under(testing::shared_data_dir());
+  if (files.empty()) GTEST_SKIP() << "../shared/data not present";
+  // Every 10th file keeps the unit suite quick; `nec` reads them all in the demo.
+  for (size_t i = 0; i < files.size(); i += 10) expect_round_trip(files[i]);
+}
+
+}  // namespace
+}  // namespace nec

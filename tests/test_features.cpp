@@ -1,0 +1,73 @@
+// The feature tensor Θ and its inverse.
+#include "nec/motion/bvh.h"
+#include "nec/motion/features.h"
+#include "nec/motion/kinematics.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+namespace nec {
+namespace {
+
+TEST(Features, LayoutOfRootAndJoints) {
+  std::mt19937 rng(41);
+  const Skeleton s = testing::random_skeleton(rng, 6);
+  const Motion m = testing::random_motion(rng, s, 3);
+  const Features f = encode_features(s, m);
+  ASSERT_EQ(f.data.size(), 3u * 6 * 9);
+  // Non-root joints carry no displacement.
+  for (int t = 0; t < 3; ++t) {
+    for (int j = 1; j < 6; ++j) {
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(f.at(t, j, k), 0.0f);
+    }
+  }
+  // Frame 0 root holds the height only.
+  EXPECT_NEAR(f.at(0, 0, 0), 0.0f, 1e-6);
+  EXPECT_NEAR(f.at(0, 0, 1), m.translation(0, 0).y(), 1e-6);
+  // The displacement is expressed in the heading frame: its length is kept.
+  const double moved = (m.translation(1, 0) - m.translation(0, 0)).norm();
+  const Vec3 delta(f.at(1, 0, 0), f.at(1, 0, 1), f.at(1, 0, 2));
+  EXPECT_NEAR(delta.norm(), moved, 1e-5);
+}
+
+TEST(Features, InvariantToWorldYaw) {
+  std::mt19937 rng(43);
+  const Skeleton s = testing::random_skeleton(rng, 5);
+  Motion m = testing::random_motion(rng, s, 6);
+  const Features before = encode_features(s, m);
+  const Quat yaw = axis_rotation(1, 57.0);
+  for (int t = 0; t < m.frame_count; ++t) {
+    m.rotation(t, 0) = yaw * m.rotation(t, 0);
+    m.translation(t, 0) = yaw * m.translation(t, 0);
+  }
+  const Features after = encode_features(s, m);
+  for (int t = 1; t < m.frame_count; ++t) {
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(before.at(t, 0, k), after.at(t, 0, k), 1e-5);
+  }
+}
+
+void expect_inverse(const Skeleton& s, const Motion& m, double tolerance) {
+  const Motion back = decode_features(s, encode_features(s, m));
+  const Pose a = forward_kinematics(s, m);
+  const Pose b = forward_kinematics(s, back);
+  const double diff = testing::max_position_difference(a.positions, b.positions) / std::max(s.diameter(), 1e-9);
+  EXPECT_LT(diff, tolerance) << "max position difference / diameter = " << diff;
+}
+
+TEST(Features, DecodeInvertsEncodeOnRandomMotion) {
+  std::mt19937 rng(47);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Skeleton s = testing::random_skeleton(rng, 4 + 6 * trial);
+    expect_inverse(s, testing::random_motion(rng, s, 50), 1e-5);
+  }
+}
+
+TEST(Features, DecodeInvertsEncodeOnLongRealClip) {
+  // Thousands of frames of integrated float displacements stay within 1e-4 diameters.
+  Clip clip = read_bvh(testing::cmu_bvh_dir() + "/01_01.bvh");
+  // Joints with position channels only at the root, as after preprocessing.
+  expect_inverse(clip.skeleton, clip.motion, 1e-4);
+}
+
+}  // namespace
+}  // namespace nec
