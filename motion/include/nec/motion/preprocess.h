@@ -1,0 +1,74 @@
+// Unified preprocessing (DESIGN.md steps 1–7; NECromancer appendix B).
+//
+//   PreparedClip p = preprocess(read_bvh(path), path, PreprocessOptions{});
+//   if (!p.report.accepted()) std::cerr << p.report.rejection;
+//   Clip original = denormalize(p.clip, p.normalization);   // back to file units and heading
+//
+// Steps: merge dummy roots outside the body; fold constant non-root position
+// channels into offsets (reject varying ones); reject abnormal bone lengths;
+// compute canonical names; scale by the diameter; rotate so +Y is up and frame
+// 0 faces +Z with the root above the origin; resample to the corpus fps.
+// Every change and the reason of a rejection is recorded in the report.
+#pragma once
+
+#include "nec/motion/motion.h"
+
+#include <string>
+#include <vector>
+
+namespace nec {
+
+enum class UpAxis { Auto, Y, Z };
+
+struct PreprocessOptions {
+  double target_fps = 30.0;             // corpus frame rate, e.g. 30; 0 keeps the file's rate
+  double max_bone_ratio = 0.6;          // reject a bone longer than this times the diameter
+  double translation_tolerance = 1e-3;  // non-root position channels varying more than this (× diameter) reject the clip
+  UpAxis up = UpAxis::Auto;             // the file's up axis; Auto detects Z-up files
+  int min_frames = 2;                   // clips shorter than this (after resampling) are rejected
+};
+
+// What preprocessing did to a clip, for the per-file report.
+struct PreprocessReport {
+  std::string file;
+  std::vector<std::string> changes;  // one line per change, e.g. "merged dummy root 'joint_Root' into 'Hips'"
+  std::string rejection;             // empty when accepted
+
+  bool accepted() const { return rejection.empty(); }
+};
+
+// How to undo the normalization: original = translate(rotate(scale * normalized)).
+struct Normalization {
+  double scale = 1.0;               // original units per normalized unit (the diameter)
+  Quat rotation = Quat::Identity(); // normalized frame -> original frame (up axis and heading)
+  Vec3 origin = Vec3::Zero();       // original position of the normalized origin
+  double source_fps = 30.0;         // frame rate of the file
+};
+
+struct PreparedClip {
+  Clip clip;                                // normalized; names are the file's own
+  std::vector<std::string> canonical_names; // (J) canonical joint names
+  Normalization normalization;
+  PreprocessReport report;
+};
+
+PreparedClip preprocess(const Clip& raw, const std::string& file, const PreprocessOptions& options = {});
+
+// Individual steps, usable on their own (each appends to `report`).
+// Step 1: the root is a dummy outside the body (named like root/reference or
+// with a single child far away) -> its child becomes the root.
+void merge_dummy_root(Clip& clip, PreprocessReport& report);
+// Step 2: returns false (and sets report.rejection) if a non-root joint's
+// translation varies by more than tolerance × diameter.
+bool fold_joint_translations(Clip& clip, double tolerance, PreprocessReport& report);
+// Step 6: which file axis points up (Y or Z), by how level the lowest joint stays.
+UpAxis detect_up_axis(const Clip& clip);
+// Step 7: slerp/lerp resampling to `fps`.
+Motion resample(const Motion& motion, double fps);
+
+// Applies a rigid transform and scale to a whole clip: x -> rotation * (scale * x) + origin.
+void transform_clip(Clip& clip, const Quat& rotation, double scale, const Vec3& origin);
+// Undoes preprocess's scale, axes and heading (not the resampling).
+Clip denormalize(const Clip& normalized, const Normalization& normalization);
+
+}  // namespace nec
