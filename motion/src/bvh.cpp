@@ -396,8 +396,10 @@ class Writer {
   Writer(const Skeleton& skeleton, const BvhWriteOptions& options)
       : skeleton_(skeleton), children_(skeleton.children_lists()), layouts_(skeleton.channels) {
     if (options.euler_order) {
+      // Only full rotation layouts are reordered: a joint with two rotation
+      // channels cannot hold its rotations in the other order of its two axes.
       for (ChannelLayout& layout : layouts_) {
-        if (layout.rotation_count() > 0) layout = layout.with_euler_order(*options.euler_order);
+        if (layout.rotation_count() == 3) layout = layout.with_euler_order(*options.euler_order);
       }
     }
   }

@@ -22,7 +22,7 @@ enum class UpAxis { Auto, Y, Z };
 
 struct PreprocessOptions {
   double target_fps = 30.0;             // corpus frame rate, e.g. 30; 0 keeps the file's rate
-  double max_bone_ratio = 0.6;          // reject a bone longer than this times the diameter
+  double max_bone_ratio = 0.9;          // reject a bone longer than this times the diameter (one bone dominating the longest chain)
   double translation_tolerance = 1e-3;  // non-root position channels varying more than this (× diameter) reject the clip
   UpAxis up = UpAxis::Auto;             // the file's up axis; Auto detects Z-up files
   int min_frames = 2;                   // clips shorter than this (after resampling) are rejected
@@ -61,7 +61,8 @@ void merge_dummy_root(Clip& clip, PreprocessReport& report);
 // Step 2: returns false (and sets report.rejection) if a non-root joint's
 // translation varies by more than tolerance × diameter.
 bool fold_joint_translations(Clip& clip, double tolerance, PreprocessReport& report);
-// Step 6: which file axis points up (Y or Z), by how level the lowest joint stays.
+// Step 6: which file axis points up (Y or Z): the one feet hang below the root
+// along; without named feet, the one along which the lowest joint stays level.
 UpAxis detect_up_axis(const Clip& clip);
 // Step 7: slerp/lerp resampling to `fps`.
 Motion resample(const Motion& motion, double fps);

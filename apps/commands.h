@@ -1,0 +1,13 @@
+// The `nec` subcommands. Each takes the arguments after its name and returns
+// the exit code: 0 ok, 1 bad input; usage problems throw UsageError (exit 2).
+#pragma once
+
+namespace nec::app {
+
+int run_info(int argc, char** argv);
+int run_convert(int argc, char** argv);
+int run_normalize(int argc, char** argv);
+int run_augment(int argc, char** argv);
+int run_prepare(int argc, char** argv);
+
+}  // namespace nec::app

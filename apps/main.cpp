@@ -1,0 +1,61 @@
+// nec: one motion language for skeletons of any shape. Dispatches subcommands.
+#include "command_line.h"
+#include "commands.h"
+
+#include "nec/motion/error.h"
+
+#include <fmt/format.h>
+
+#include <cstring>
+#include <string>
+
+namespace {
+
+struct Subcommand {
+  const char* name;
+  int (*run)(int, char**);
+  const char* summary;
+};
+
+constexpr Subcommand kSubcommands[] = {
+    {"info", nec::app::run_info, "print a BVH file's skeleton, channels, frames and diameter"},
+    {"convert", nec::app::run_convert, "read a BVH file and write it back (optionally in another Euler order)"},
+    {"normalize", nec::app::run_normalize, "apply the unified preprocessing and write the result"},
+    {"augment", nec::app::run_augment, "write a rig-augmented copy (rest pose, bone lengths, joints)"},
+    {"prepare", nec::app::run_prepare, "turn folders of BVH (+ captions) into a dataset cache"},
+};
+
+void print_overview() {
+  fmt::print("usage: nec COMMAND [arguments] [options]\n\ncommands:\n");
+  for (const Subcommand& c : kSubcommands) fmt::print("  {:<10} {}\n", c.name, c.summary);
+  fmt::print("\n`nec COMMAND --help` shows a command's arguments and defaults.\n"
+             "exit codes: 0 ok, 1 bad input, 2 usage error\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
+    print_overview();
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string name = argv[1];
+  for (const Subcommand& c : kSubcommands) {
+    if (name != c.name) continue;
+    try {
+      return c.run(argc - 2, argv + 2);
+    } catch (const nec::app::UsageError& e) {
+      fmt::print(stderr, "nec {}: {}\n(see `nec {} --help`)\n", name, e.what(), name);
+      return 2;
+    } catch (const nec::InputError& e) {
+      fmt::print(stderr, "nec: error: {}\n", e.what());
+      return 1;
+    } catch (const std::exception& e) {
+      fmt::print(stderr, "nec: error: {}\n", e.what());
+      return 1;
+    }
+  }
+  fmt::print(stderr, "nec: unknown command '{}'\n\n", name);
+  print_overview();
+  return 2;
+}
