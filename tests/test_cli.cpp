@@ -1,0 +1,119 @@
+// The `nec` binary: exit codes, error messages and outputs of the subcommands.
+#include "nec/motion/bvh.h"
+#include "nec/motion/kinematics.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+namespace nec {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult run_nec(const std::string& arguments) {
+  const std::string command = std::string(NEC_BINARY_DIR) + "/apps/nec " + arguments + " 2>&1";
+  CommandResult run;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return run;
+  std::array<char, 4096> buffer{};
+  size_t n = 0;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("nec_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name), std::ios::binary) << text;
+    return path(name);
+  }
+  fs::path dir_;
+};
+
+const std::string kCmu = testing::cmu_bvh_dir() + "/01_01.bvh";
+
+TEST_F(Cli, HelpShowsDefaultsAndUsageErrorsExitTwo) {
+  const CommandResult help = run_nec("normalize --help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.output.find("(default: 30)"), std::string::npos) << help.output;
+  EXPECT_EQ(run_nec("").exit_code, 2);
+  EXPECT_EQ(run_nec("frobnicate").exit_code, 2);
+  EXPECT_EQ(run_nec("convert " + kCmu).exit_code, 2);  // missing -o
+  EXPECT_EQ(run_nec("convert " + kCmu + " -o x.bvh --order QQQ").exit_code, 2);
+  EXPECT_EQ(run_nec("augment " + kCmu + " -o x.bvh --kind nope").exit_code, 2);
+  EXPECT_EQ(run_nec("augment " + kCmu + " -o x.bvh --seed abc").exit_code, 2);
+}
+
+TEST_F(Cli, InfoDescribesTheFile) {
+  const CommandResult run = run_nec("info " + kCmu);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("joints    31"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("2752 at 120 fps"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("Zrotation Yrotation Xrotation"), std::string::npos);
+  EXPECT_NE(run.output.find("LeftUpLeg"), std::string::npos);
+}
+
+TEST_F(Cli, BadInputExitsOneWithFileAndLineAndWritesNothing) {
+  const std::string bad = write("bad.bvh", "HIERARCHY\nROOT A\n{\n  OFFSET 0 0 0\n  CHANNELS 1 Qrotation\n}\n");
+  const std::string out = path("out.bvh");
+  for (const std::string& command : {"info " + bad, "convert " + bad + " -o " + out, "normalize " + bad + " -o " + out,
+                                     "augment " + bad + " -o " + out}) {
+    const CommandResult run = run_nec(command);
+    EXPECT_EQ(run.exit_code, 1) << command << "\n" << run.output;
+    EXPECT_NE(run.output.find("bad.bvh:5: unknown channel 'Qrotation'"), std::string::npos) << run.output;
+  }
+  EXPECT_EQ(run_nec("info " + path("missing.bvh")).exit_code, 1);
+  EXPECT_EQ(run_nec("info " + write("empty.bvh", "")).exit_code, 1);
+  EXPECT_FALSE(fs::exists(out));
+  // Nothing but the two inputs: no temporary files left behind.
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 2);
+}
+
+TEST_F(Cli, ConvertRoundTripsAndChangesOrder) {
+  const std::string out = path("zyx.bvh");
+  const CommandResult run = run_nec("convert " + kCmu + " -o " + out + " --order XYZ");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const Clip a = read_bvh(kCmu);
+  const Clip b = read_bvh(out);
+  EXPECT_EQ(b.skeleton.channels[1].euler_order(), EulerOrder::XYZ);
+  const Pose pa = forward_kinematics(a.skeleton, a.motion);
+  const Pose pb = forward_kinematics(b.skeleton, b.motion);
+  EXPECT_LT(testing::max_position_difference(pa.positions, pb.positions), 1e-4);
+}
+
+TEST_F(Cli, NormalizeAndAugmentWriteReadableFiles) {
+  const std::string normalized = path("n.bvh");
+  const CommandResult run = run_nec("normalize " + kCmu + " -o " + normalized);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("resampled 120 -> 30 fps"), std::string::npos) << run.output;
+  const Clip n = read_bvh(normalized);
+  EXPECT_NEAR(n.skeleton.diameter(), 1.0, 1e-6);
+  for (const std::string kind : {"rest", "length", "joints", "remove", "subdivide"}) {
+    const std::string out = path(kind + ".bvh");
+    const CommandResult augmented = run_nec("augment " + normalized + " --kind " + kind + " --seed 4 -o " + out);
+    ASSERT_EQ(augmented.exit_code, 0) << kind << ": " << augmented.output;
+    EXPECT_EQ(read_bvh(out).motion.frame_count, n.motion.frame_count);
+  }
+}
+
+}  // namespace
+}  // namespace nec
