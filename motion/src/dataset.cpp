@@ -6,7 +6,10 @@
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 
+#include <fcntl.h>
 #include <nlohmann/json.hpp>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -407,6 +410,41 @@ std::string list_for_message(const std::vector<std::string>& names) {
 
 }  // namespace
 
+FeatureArray::FeatureArray(std::vector<float> values) {
+  auto owned = std::make_shared<const std::vector<float>>(std::move(values));
+  data_ = owned->data();
+  size_ = owned->size();
+  owner_ = std::move(owned);
+}
+
+FeatureArray FeatureArray::map_file(const std::string& path, size_t floats) {
+  FeatureArray out;
+  if (floats == 0) return out;
+  const size_t bytes = floats * sizeof(float);
+  if (!host_is_little_endian()) {
+    std::vector<float> values(floats);
+    std::ifstream in(path, std::ios::binary);
+    in.read(reinterpret_cast<char*>(values.data()), static_cast<std::streamsize>(bytes));
+    if (!in) throw InputError(path, 0, std::string("read failed: ") + std::strerror(errno) + kHint);
+    swap_float_bytes(values.data(), floats);
+    return FeatureArray(std::move(values));
+  }
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno) + kHint);
+  int flags = MAP_PRIVATE;
+#ifdef MAP_POPULATE
+  flags |= MAP_POPULATE;  // fault the pages in now: much faster than one by one on first use
+#endif
+  void* mapping = ::mmap(nullptr, bytes, PROT_READ, flags, fd, 0);
+  const int map_error = errno;
+  ::close(fd);
+  if (mapping == MAP_FAILED) throw InputError(path, 0, std::string("cannot map: ") + std::strerror(map_error) + kHint);
+  out.owner_ = std::shared_ptr<const void>(mapping, [bytes](const void* p) { ::munmap(const_cast<void*>(p), bytes); });
+  out.data_ = static_cast<const float*>(mapping);
+  out.size_ = floats;
+  return out;
+}
+
 std::string_view split_name(Split split) {
   switch (split) {
     case Split::Train: return "train";
@@ -598,6 +636,7 @@ DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOpti
   std::unordered_map<std::string, int> skeleton_by_record;
   std::unordered_set<std::string> skeleton_names;
   std::unordered_map<std::string, int> unnamed_per_dataset;
+  std::vector<float> feature_data;
 
   for (size_t index = 0; index < entries.size(); ++index) {
     const CacheEntry& e = entries[index];
@@ -661,11 +700,12 @@ DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOpti
     c.normalization = p.normalization;
     c.start_xz = f.start_xz;
     c.report = p.report.changes;
-    c.feature_offset = cache.feature_data.size();
-    cache.feature_data.insert(cache.feature_data.end(), f.data.begin(), f.data.end());
+    c.feature_offset = feature_data.size();
+    feature_data.insert(feature_data.end(), f.data.begin(), f.data.end());
     cache.clips.push_back(std::move(c));
   }
 
+  cache.feature_data = FeatureArray(std::move(feature_data));
   const std::vector<Split> splits = assign_splits(cache, options.split);
   for (size_t i = 0; i < splits.size(); ++i) cache.clips[i].split = splits[i];
   return cache;
@@ -883,7 +923,6 @@ DatasetCache read_cache(const std::string& dir) {
                                            std::to_string(feature_floats) + kHint);
   }
 
-  // Features: read straight into the array.
   const uintmax_t feature_bytes = fs::file_size(features_path, ec);
   if (ec) throw InputError(features_path, 0, "cannot read: " + ec.message() + kHint);
   if (feature_bytes != feature_floats * sizeof(float)) {
@@ -891,11 +930,7 @@ DatasetCache read_cache(const std::string& dir) {
                                            std::to_string(feature_floats * sizeof(float)) +
                                            " (truncated or from another cache)" + kHint);
   }
-  cache.feature_data.resize(feature_floats);
-  std::ifstream in(features_path, std::ios::binary);
-  in.read(reinterpret_cast<char*>(cache.feature_data.data()), static_cast<std::streamsize>(feature_floats * sizeof(float)));
-  if (!in) throw InputError(features_path, 0, std::string("read failed: ") + std::strerror(errno) + kHint);
-  if (!host_is_little_endian()) swap_float_bytes(cache.feature_data.data(), cache.feature_data.size());
+  cache.feature_data = FeatureArray::map_file(features_path, feature_floats);
   return cache;
 }
 

@@ -82,7 +82,8 @@ class BatchLoader {
   int batches_per_epoch() const;
   // Clip indices in the order epoch `epoch` visits them.
   std::vector<int> epoch_order(int epoch) const;
-  // Batch `index` (0 <= index < batches_per_epoch()) of epoch `epoch`.
+  // Batch `index` (0 <= index < batches_per_epoch()) of epoch `epoch`. Safe
+  // to call from several threads at once (e.g. a prefetching pool); next() is not.
   Batch batch(int epoch, int index) const;
   // The next batch of the stream: batch 0 of epoch 0, 1, ..., then epoch 1.
   Batch next();

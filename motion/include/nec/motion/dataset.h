@@ -23,6 +23,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -72,6 +73,29 @@ struct CacheEntry {
   std::string skeleton_name;          // label of the skeleton, e.g. "spider"; empty: the dataset name (+ "-2", "-3", ...)
 };
 
+// Read-only floats shared by the copies of a cache: a memory map of
+// features.f32 (read_cache) or an owned array (build_cache). Mapping is what
+// makes loading fast; the data stays valid after the cache directory is
+// replaced (the old file lives on while mapped), not if it is truncated in place.
+class FeatureArray {
+ public:
+  FeatureArray() = default;
+  explicit FeatureArray(std::vector<float> values);
+  // Maps `floats` little-endian float32 values of `path` (read and byte-swapped
+  // on big-endian hosts). Throws InputError when the file cannot be read.
+  static FeatureArray map_file(const std::string& path, size_t floats);
+
+  const float* data() const { return data_; }
+  size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  const float& operator[](size_t i) const { return data_[i]; }
+
+ private:
+  std::shared_ptr<const void> owner_;  // the vector or the mapping
+  const float* data_ = nullptr;
+  size_t size_ = 0;
+};
+
 // A distinct skeleton of the corpus (stored once however many clips use it).
 struct CachedSkeleton {
   std::string name;                          // unique label, e.g. "dog" or "bandai-2"
@@ -115,7 +139,7 @@ struct DatasetCache {
   std::vector<CachedSkeleton> skeletons;
   std::vector<CacheClip> clips;
   std::vector<RejectedFile> rejected;
-  std::vector<float> feature_data;       // every clip's (T, J, 9) Θ, concatenated in clip order
+  FeatureArray feature_data;             // every clip's (T, J, 9) Θ, concatenated in clip order
 
   int clip_count() const { return static_cast<int>(clips.size()); }
   const CachedSkeleton& skeleton_of(int clip) const { return skeletons.at(clips.at(clip).skeleton); }
