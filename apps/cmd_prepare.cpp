@@ -2,14 +2,159 @@
 #include "command_line.h"
 #include "commands.h"
 
+#include "nec/motion/corpus.h"
+
+#include <fmt/format.h>
+
+#include <map>
+#include <set>
+#include <sstream>
+
 namespace nec::app {
+namespace {
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+double fraction_option(const CommandLine& cli, const std::string& name) {
+  const double value = cli.number(name);
+  if (value < 0.0 || value >= 1.0) throw UsageError(name + " must be in [0, 1)");
+  return value;
+}
+
+}  // namespace
 
 int run_prepare(int argc, char** argv) {
-  CommandLine cli("nec prepare", "Turn folders of BVH files (+ captions) into a dataset cache.");
-  cli.positional("DIR", "folders or BVH files to read", true, true);
-  cli.option("-o", "CACHE", "", "output cache directory", true);
+  CommandLine cli("nec prepare",
+                  "Turn folders of BVH files (+ captions) into one dataset cache: every file is read, captioned,\n"
+                  "preprocessed (as nec normalize) and split into train/val/test by source file. Long takes\n"
+                  "without captions are cut into clips and captioned from their kinematics. Captions come from\n"
+                  "clip.txt next to clip.bvh, --captions tables, or Bandai labels. Prints one line per file.");
+  cli.positional("INPUT", "folder (searched recursively) or BVH file; NAME=PATH names its dataset", true, true);
+  cli.option("-o", "CACHE", "", "output cache directory (replaced atomically)", true);
+  cli.option("--fps", "FPS", "30", "corpus frame rate");
+  cli.option("--up", "AXIS", "auto", "up axis of the inputs: auto, y or z");
+  cli.option("--val", "FRACTION", "0.05", "fraction of source files for validation");
+  cli.option("--test", "FRACTION", "0.05", "fraction of source files for test");
+  cli.option("--seed", "N", "0", "split seed");
+  cli.option("--hold-out", "PATTERNS", "", "skeleton names or hashes (comma-separated, * ? wildcards) put wholly in test");
+  cli.option("--hold-out-dataset", "NAMES", "", "datasets (comma-separated) put wholly in test");
+  cli.option("--captions", "CSV", "", "caption tables `file,caption` (comma-separated paths)");
+  cli.option("--segment-over", "SECONDS", "20", "segment uncaptioned takes longer than this; 0 never");
+  cli.option("--creature", "NOUN", "creature", "noun for segmenter captions; DATASET=NOUN pairs allowed, comma-separated");
+  cli.option("--threads", "N", "0", "worker threads; 0 = all cores");
+  cli.flag("--quiet", "print only the summary");
+  cli.example("nec prepare bandai=../shared/data/bandai dog=../shared/data/mann_dog --creature dog=dog -o cache/");
   if (!cli.parse(argc, argv)) return 0;
-  throw UsageError("nec prepare is not available yet");
+
+  CorpusOptions corpus;
+  corpus.preprocess.target_fps = cli.number("--fps");
+  if (corpus.preprocess.target_fps <= 0) throw UsageError("--fps must be > 0");
+  const std::string up = cli.value("--up");
+  if (up == "auto") {
+    corpus.preprocess.up = UpAxis::Auto;
+  } else if (up == "y") {
+    corpus.preprocess.up = UpAxis::Y;
+  } else if (up == "z") {
+    corpus.preprocess.up = UpAxis::Z;
+  } else {
+    throw UsageError("--up must be auto, y or z");
+  }
+  corpus.segment_longer_than = cli.number("--segment-over");
+  corpus.threads = cli.integer("--threads");
+  for (const std::string& csv : split_list(cli.value("--captions"))) corpus.captions.tables.push_back(CaptionTable::read(csv));
+  std::string default_creature = "creature";
+  std::map<std::string, std::string> creature_of;
+  for (const std::string& item : split_list(cli.value("--creature"))) {
+    const size_t eq = item.find('=');
+    if (eq == std::string::npos) {
+      default_creature = item;
+    } else {
+      creature_of[item.substr(0, eq)] = item.substr(eq + 1);
+    }
+  }
+  CacheOptions cache_options;
+  cache_options.preprocess = corpus.preprocess;
+  cache_options.split.val_fraction = fraction_option(cli, "--val");
+  cache_options.split.test_fraction = fraction_option(cli, "--test");
+  cache_options.split.seed = static_cast<uint64_t>(cli.integer("--seed"));
+  cache_options.split.held_out_skeletons = split_list(cli.value("--hold-out"));
+  cache_options.split.held_out_datasets = split_list(cli.value("--hold-out-dataset"));
+  try {
+    cache_options.split.validate();
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+
+  const std::vector<CorpusFile> files = find_corpus_files(cli.positionals("INPUT"));
+  // Datasets are loaded one at a time so each gets its own creature noun.
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<CorpusFile>> by_dataset;
+  for (const CorpusFile& f : files) {
+    if (!by_dataset.count(f.dataset)) order.push_back(f.dataset);
+    by_dataset[f.dataset].push_back(f);
+  }
+  CorpusResult result;
+  for (const std::string& dataset : order) {
+    CorpusOptions options = corpus;
+    const auto creature = creature_of.find(dataset);
+    options.segment.creature = creature != creature_of.end() ? creature->second : default_creature;
+    CorpusResult part = load_corpus(by_dataset[dataset], options);
+    for (CacheEntry& e : part.entries) result.entries.push_back(std::move(e));
+    for (CorpusFileResult& f : part.files) result.files.push_back(std::move(f));
+  }
+  const bool quiet = cli.is_set("--quiet");
+  int rejected_files = 0;
+  for (const CorpusFileResult& f : result.files) {
+    if (!f.error.empty()) ++rejected_files;
+    if (quiet && f.error.empty()) continue;
+    std::string what;
+    for (const std::string& change : f.changes) what += (what.empty() ? "" : "; ") + change;
+    if (f.segments > 0) what += fmt::format("; cut into {} clips", f.segments);
+    if (f.error.empty()) {
+      fmt::print("ok       {}: {}\n", f.path, what);
+    } else {
+      fmt::print("rejected {}: {}\n", f.path, f.error);
+    }
+  }
+  write_cache(cli.value("-o"), result.entries, cache_options);
+  const DatasetCache cache = read_cache(cli.value("-o"));
+
+  struct Row {
+    std::set<int> skeletons;
+    std::set<int> joint_counts;
+    int clips = 0, frames = 0, captioned = 0;
+    int split[3] = {0, 0, 0};
+  };
+  std::map<std::string, Row> rows;
+  for (const CacheClip& c : cache.clips) {
+    Row& r = rows[c.dataset];
+    r.skeletons.insert(c.skeleton);
+    r.joint_counts.insert(c.joint_count);
+    ++r.clips;
+    r.frames += c.frame_count;
+    r.captioned += !c.captions.empty();
+    ++r.split[static_cast<int>(c.split)];
+  }
+  fmt::print("\n| dataset | skeletons | joints | clips | frames | captioned | train/val/test |\n");
+  fmt::print("|---|---|---|---|---|---|---|\n");
+  for (const auto& [name, r] : rows) {
+    const std::string joints = *r.joint_counts.begin() == *r.joint_counts.rbegin()
+                                   ? std::to_string(*r.joint_counts.begin())
+                                   : fmt::format("{}-{}", *r.joint_counts.begin(), *r.joint_counts.rbegin());
+    fmt::print("| {} | {} | {} | {} | {} | {} | {}/{}/{} |\n", name, r.skeletons.size(), joints, r.clips, r.frames,
+               r.captioned, r.split[0], r.split[1], r.split[2]);
+  }
+  fmt::print("\n{} files, {} rejected; {} clips at {:.4g} fps in {}\n", result.files.size(), rejected_files,
+             cache.clips.size(), cache.fps, cli.value("-o"));
+  return 0;
 }
 
 }  // namespace nec::app

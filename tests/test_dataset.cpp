@@ -186,9 +186,13 @@ TEST(DatasetCache, IdenticalSkeletonsAreStoredOnce) {
   // Same tree, different canonical names: a different skeleton.
   entries.push_back(make_entry(rng, a, 4, "zoo/x.bvh", "zoo"));
   entries.back().prepared.canonical_names[1] = "left wing";
-  // Same tree, offset differs in the last bit: a different skeleton.
+  // Same tree, an offset differs by rounding (1e-6 diameters): the same skeleton.
+  Skeleton rounded = a;
+  rounded.offsets[2].x() += 1e-6 * a.diameter();
+  entries.push_back(make_entry(rng, rounded, 4, "bandai/rounded.bvh", "bandai"));
+  // Same tree, an offset differs by 1e-3 diameters: a different skeleton.
   Skeleton nudged = a;
-  nudged.offsets[2].x() = std::nextafter(nudged.offsets[2].x(), 10.0);
+  nudged.offsets[2].x() += 1e-3 * a.diameter();
   entries.push_back(make_entry(rng, nudged, 4, "zoo/spider.bvh", "zoo"));
   entries.back().skeleton_name = "spider";
 
@@ -197,6 +201,7 @@ TEST(DatasetCache, IdenticalSkeletonsAreStoredOnce) {
   const DatasetCache cache = read_cache(dir / "cache");
   ASSERT_EQ(cache.skeletons.size(), 4u);
   for (int i = 0; i < 6; ++i) EXPECT_EQ(cache.clips[i].skeleton, i % 2 ? 1 : 0) << i;
+  EXPECT_EQ(cache.clips[7].skeleton, 1);
   EXPECT_EQ(cache.skeletons[0].name, "bandai");
   EXPECT_EQ(cache.skeletons[1].name, "bandai-2");
   EXPECT_EQ(cache.skeletons[2].name, "zoo");

@@ -612,6 +612,36 @@ std::vector<Split> assign_splits(const DatasetCache& cache, const SplitOptions& 
   return splits;
 }
 
+namespace {
+
+constexpr double kSameOffsetTolerance = 1e-4;  // diameters
+
+// Everything of a skeleton but its offsets.
+std::string topology_key(const Skeleton& s, const std::vector<std::string>& canonical_names) {
+  std::string key;
+  for (int j = 0; j < s.joint_count(); ++j) {
+    key += s.names[j] + '\x1f' + canonical_names[j] + '\x1f' + std::to_string(s.parents[j]) + '\x1f';
+    for (int c = 0; c < s.channels[j].count; ++c) key += static_cast<char>('0' + static_cast<int>(s.channels[j].channels[c]));
+    key += '\x1e';
+  }
+  for (const EndSite& e : s.end_sites) key += std::to_string(e.parent) + ',';
+  return key;
+}
+
+// Offsets and end sites within kSameOffsetTolerance of the larger diameter.
+bool same_geometry(const Skeleton& a, const Skeleton& b) {
+  const double tolerance = kSameOffsetTolerance * std::max({a.diameter(), b.diameter(), 1e-12});
+  for (int j = 0; j < a.joint_count(); ++j) {
+    if ((a.offsets[j] - b.offsets[j]).norm() > tolerance) return false;
+  }
+  for (size_t e = 0; e < a.end_sites.size(); ++e) {
+    if ((a.end_sites[e].offset - b.end_sites[e].offset).norm() > tolerance) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOptions& options) {
   options.split.validate();
   DatasetCache cache;
@@ -633,7 +663,7 @@ DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOpti
   }
   std::unordered_map<std::string, int> next_segment;
   std::unordered_set<std::string> ids;
-  std::unordered_map<std::string, int> skeleton_by_record;
+  std::unordered_map<std::string, std::vector<int>> skeletons_by_topology;
   std::unordered_set<std::string> skeleton_names;
   std::unordered_map<std::string, int> unnamed_per_dataset;
   std::vector<float> feature_data;
@@ -668,9 +698,19 @@ DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOpti
     }
     if (!ids.insert(c.id).second) throw std::invalid_argument(what + "duplicate clip id '" + c.id + "'");
 
-    const std::string record = serialize_skeleton(skeleton, p.canonical_names);
-    auto found = skeleton_by_record.find(record);
-    if (found == skeleton_by_record.end()) {
+    // Clips of one rig differ in their offsets only by rounding (folded
+    // position channels, resampling): same topology and offsets within
+    // kSameOffsetTolerance diameters share one stored skeleton.
+    std::vector<int>& same_topology = skeletons_by_topology[topology_key(skeleton, p.canonical_names)];
+    int stored_index = -1;
+    for (int candidate : same_topology) {
+      if (same_geometry(cache.skeletons[candidate].skeleton, skeleton)) {
+        stored_index = candidate;
+        break;
+      }
+    }
+    if (stored_index < 0) {
+      const std::string record = serialize_skeleton(skeleton, p.canonical_names);
       CachedSkeleton stored;
       std::string base = e.skeleton_name;
       if (base.empty()) {
@@ -684,14 +724,15 @@ DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOpti
       stored.hash = hex16(fnv1a(record));
       stored.skeleton = skeleton;
       stored.canonical_names = p.canonical_names;
-      found = skeleton_by_record.emplace(record, static_cast<int>(cache.skeletons.size())).first;
+      stored_index = static_cast<int>(cache.skeletons.size());
+      same_topology.push_back(stored_index);
       cache.skeletons.push_back(std::move(stored));
     }
 
     const Features f = encode_features(skeleton, motion);
     c.source = e.source;
     c.dataset = e.dataset;
-    c.skeleton = found->second;
+    c.skeleton = stored_index;
     c.frame_count = f.frame_count;
     c.joint_count = f.joint_count;
     c.fps = cache.fps;

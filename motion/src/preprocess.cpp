@@ -319,6 +319,14 @@ PreparedClip preprocess(const Clip& raw, const std::string& file, const Preproce
   const Vec3 shift(-start.x(), 0.0, -start.z());
   transform_clip(clip, Quat::Identity(), 1.0, shift);
 
+  // The root's rest offset only matters when it has no position channels:
+  // give it position channels and a zero offset, so clips of one rig share
+  // one normalized skeleton.
+  if (!clip.skeleton.channels[0].has_position()) {
+    clip.skeleton.channels[0] = ChannelLayout::position_rotations(clip.skeleton.channels[0].euler_order());
+  }
+  clip.skeleton.offsets[0] = Vec3::Zero();
+
   // original = R * (diameter * normalized) + origin, with R = up_fix^-1 * heading_fix^-1.
   const Quat to_original = (up_fix.conjugate() * heading_fix.conjugate()).normalized();
   out.normalization.scale = diameter;

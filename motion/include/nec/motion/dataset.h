@@ -12,8 +12,9 @@
 //
 // A directory holds manifest.json (format, version, options, skeletons, clips,
 // rejected files), features.f32 (every clip's Θ, float32 little-endian,
-// concatenated) and skeletons.bin (each distinct skeleton once, deduplicated by
-// content hash). Splits are assigned per source file, so the clips cut from one
+// concatenated) and skeletons.bin (each distinct skeleton once: clips whose
+// skeletons have the same topology and offsets within 1e-4 diameters share the
+// first one's record). Splits are assigned per source file, so the clips cut from one
 // long take never straddle train and test.
 #pragma once
 
