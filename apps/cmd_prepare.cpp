@@ -34,9 +34,10 @@ double fraction_option(const CommandLine& cli, const std::string& name) {
 int run_prepare(int argc, char** argv) {
   CommandLine cli("nec prepare",
                   "Turn folders of BVH files (+ captions) into one dataset cache: every file is read, captioned,\n"
-                  "preprocessed (as nec normalize) and split into train/val/test by source file. Long takes\n"
-                  "without captions are cut into clips and captioned from their kinematics. Captions come from\n"
-                  "clip.txt next to clip.bvh, --captions tables, or Bandai labels. Prints one line per file.");
+                  "preprocessed (as nec normalize) and split into train/val/test by source file. Captions come\n"
+                  "from clip.txt next to clip.bvh, --captions tables, or Bandai labels; takes without any are cut\n"
+                  "into 2-6 s clips captioned from their kinematics (speed, turning, height, jumps).\n"
+                  "Prints one line per file and a summary table.");
   cli.positional("INPUT", "folder (searched recursively) or BVH file; NAME=PATH names its dataset", true, true);
   cli.option("-o", "CACHE", "", "output cache directory (replaced atomically)", true);
   cli.option("--fps", "FPS", "30", "corpus frame rate");
@@ -47,7 +48,7 @@ int run_prepare(int argc, char** argv) {
   cli.option("--hold-out", "PATTERNS", "", "skeleton names or hashes (comma-separated, * ? wildcards) put wholly in test");
   cli.option("--hold-out-dataset", "NAMES", "", "datasets (comma-separated) put wholly in test");
   cli.option("--captions", "CSV", "", "caption tables `file,caption` (comma-separated paths)");
-  cli.option("--segment-over", "SECONDS", "20", "segment uncaptioned takes longer than this; 0 never");
+  cli.flag("--no-kinematic-captions", "keep uncaptioned takes whole and without captions");
   cli.option("--creature", "NOUN", "creature", "noun for segmenter captions; DATASET=NOUN pairs allowed, comma-separated");
   cli.option("--threads", "N", "0", "worker threads; 0 = all cores");
   cli.flag("--quiet", "print only the summary");
@@ -67,7 +68,7 @@ int run_prepare(int argc, char** argv) {
   } else {
     throw UsageError("--up must be auto, y or z");
   }
-  corpus.segment_longer_than = cli.number("--segment-over");
+  corpus.kinematic_captions = !cli.is_set("--no-kinematic-captions");
   corpus.threads = cli.integer("--threads");
   for (const std::string& csv : split_list(cli.value("--captions"))) corpus.captions.tables.push_back(CaptionTable::read(csv));
   std::string default_creature = "creature";

@@ -56,8 +56,7 @@ FileOutput load_file(const CorpusFile& file, const CorpusOptions& options) {
     out.entries.push_back(rejected_entry(file, e.what()));
     return out;
   }
-  const bool segment = captions.empty() && options.segment_longer_than > 0 &&
-                       take.motion.duration_seconds() > options.segment_longer_than;
+  const bool segment = captions.empty() && options.kinematic_captions;
   if (!segment) {
     CacheEntry entry;
     entry.prepared = preprocess(take, file.path, options.preprocess);

@@ -7,9 +7,9 @@
 //
 // Each input is a folder (searched recursively for *.bvh) or a file, optionally
 // prefixed with `NAME=` to name its dataset; otherwise the dataset is named
-// after the folder (or, for a file, its parent folder). Long takes without
-// captions (the dog) are cut into clips and captioned by the kinematic
-// segmenter; each clip is preprocessed on its own, so it starts at the origin
+// after the folder (or, for a file, its parent folder). Takes without
+// captions (the dog) are cut into clips (SegmentOptions: 2–6 s) and captioned
+// by the kinematic segmenter; each clip is preprocessed on its own, so it starts at the origin
 // facing +Z. A file that cannot be read becomes a rejected entry with the
 // reader's message; it never stops the run.
 #pragma once
@@ -33,7 +33,7 @@ struct CorpusOptions {
   PreprocessOptions preprocess;
   CaptionSources captions;
   SegmentOptions segment;
-  double segment_longer_than = 20.0;  // seconds; uncaptioned takes longer than this are segmented; <= 0 never
+  bool kinematic_captions = true;     // cut uncaptioned takes into clips captioned from their kinematics
   int threads = 0;                    // worker threads; 0 = all cores
 };
 
