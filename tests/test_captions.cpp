@@ -13,32 +13,10 @@
 namespace nec {
 namespace {
 
+using testing::TempDir;
+
 namespace fs = std::filesystem;
 
-// A fresh folder under the system temp folder, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    std::random_device entropy;
-    path_ = fs::temp_directory_path() / ("nec_captions_" + std::to_string(entropy()) + std::to_string(entropy()));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  // Writes `text` to `relative` (creating folders); returns the full path.
-  std::string write(const std::string& relative, const std::string& text) const {
-    const fs::path file = path_ / relative;
-    fs::create_directories(file.parent_path());
-    std::ofstream(file, std::ios::binary) << text;
-    return file.string();
-  }
-  std::string path(const std::string& relative) const { return (path_ / relative).string(); }
-
- private:
-  fs::path path_;
-};
 
 // The message of the InputError `f` throws, or "" when it throws none.
 template <typename F>
@@ -126,7 +104,7 @@ TEST(Captions, UnknownBandaiLabelsAreInputErrors) {
   const std::string bvh = dir.write("set/data/take.bvh", "");
   dir.write("set/data/take.json", "{\"content\": 1, \"style\": 0}");
   const std::string list_error = input_error([&] { captions_for(bvh); });
-  EXPECT_TRUE(contains(list_error, dir.path("set/cfg/content_label.txt") + ":3: unknown Bandai content 'fly'"))
+  EXPECT_TRUE(contains(list_error, (dir / "set/cfg/content_label.txt") + ":3: unknown Bandai content 'fly'"))
       << list_error;
 
   EXPECT_THROW(bandai_captions({1, "fly", "happy"}), std::invalid_argument);
@@ -137,7 +115,7 @@ TEST(Captions, BadBandaiJsonIsAnInputError) {
   dir.write("cfg/content_label.txt", kSet1Contents);
   dir.write("cfg/style_label.txt", kSet1Styles);
   const std::string bvh = dir.write("take.bvh", "");
-  const std::string json = dir.path("take.json");
+  const std::string json = dir / "take.json";
 
   dir.write("take.json", "{\"content\": 7, \"style\": 0}");  // 7 contents: indices 0..6
   std::string message = input_error([&] { captions_for(bvh); });
@@ -262,7 +240,7 @@ TEST(Captions, EmptySidecarIsAnInputError) {
   const std::string txt = dir.write("clip.txt", " \n\r\n\t\n");
   const std::string message = input_error([&] { captions_for(bvh); });
   EXPECT_TRUE(contains(message, txt + ": no caption")) << message;
-  EXPECT_TRUE(contains(input_error([&] { read_caption_lines(dir.path("absent.txt")); }), "absent.txt: cannot open"));
+  EXPECT_TRUE(contains(input_error([&] { read_caption_lines(dir / "absent.txt"); }), "absent.txt: cannot open"));
 }
 
 TEST(Captions, SourcesAreTriedInOrder) {
@@ -311,19 +289,19 @@ TEST(Captions, CsvTableParsesQuotesHeadersAndRelativePaths) {
   EXPECT_EQ(table.find(sit), (std::vector<std::string>{"a dog sits, says \"woof\"", "a dog sits down"}));
   EXPECT_EQ(table.find("/elsewhere/absolute.bvh"), std::vector<std::string>{"far away"});
   EXPECT_EQ(table.find("/elsewhere/../elsewhere/absolute.bvh"), std::vector<std::string>{"far away"});
-  EXPECT_TRUE(table.find(dir.path("corpus/run.bvh")).empty());
+  EXPECT_TRUE(table.find(dir / "corpus/run.bvh").empty());
   // Paths are relative to the CSV's folder, not to the working directory.
   const fs::path before = fs::current_path();
-  fs::current_path(dir.path("corpus/dogs"));
+  fs::current_path(dir / "corpus/dogs");
   EXPECT_EQ(table.find("walk.bvh").size(), 2u);
   fs::current_path(before);
   // Files the table names that do not exist.
   EXPECT_EQ(table.missing_files(), std::vector<std::string>{"/elsewhere/absolute.bvh"});
 
   // Without a header the first row is data.
-  const CaptionTable plain = CaptionTable::parse("a.bvh,first\nb.bvh,second\n", dir.path("t.csv"));
+  const CaptionTable plain = CaptionTable::parse("a.bvh,first\nb.bvh,second\n", (dir / "t.csv"));
   EXPECT_EQ(plain.file_count(), 2u);
-  EXPECT_EQ(plain.find(dir.path("a.bvh")), std::vector<std::string>{"first"});
+  EXPECT_EQ(plain.find(dir / "a.bvh"), std::vector<std::string>{"first"});
 }
 
 TEST(Captions, CsvErrorsNameTheFileAndLine) {

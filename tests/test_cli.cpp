@@ -35,18 +35,9 @@ CommandResult run_nec(const std::string& arguments) {
 
 class Cli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("nec_cli_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string write(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name), std::ios::binary) << text;
-    return path(name);
-  }
-  fs::path dir_;
+  std::string path(const std::string& name) const { return dir_ / name; }
+  std::string write(const std::string& name, const std::string& text) const { return dir_.write(name, text); }
+  testing::TempDir dir_;
 };
 
 const std::string kCmu = testing::cmu_bvh_dir() + "/01_01.bvh";
@@ -85,7 +76,7 @@ TEST_F(Cli, BadInputExitsOneWithFileAndLineAndWritesNothing) {
   EXPECT_EQ(run_nec("info " + write("empty.bvh", "")).exit_code, 1);
   EXPECT_FALSE(fs::exists(out));
   // Nothing but the two inputs: no temporary files left behind.
-  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 2);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_.path()), fs::directory_iterator()), 2);
 }
 
 TEST_F(Cli, ConvertRoundTripsAndChangesOrder) {

@@ -17,13 +17,6 @@ namespace fs = std::filesystem;
 
 class Corpus : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("nec_corpus_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_ / "rigs" / "sub");
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   // A random rig with `seconds` of motion at 30 fps, written as BVH.
   std::string write_clip(const std::string& relative, double seconds, unsigned seed) {
     std::mt19937 rng(seed);
@@ -33,36 +26,37 @@ class Corpus : public ::testing::Test {
       m.rotation(t, 1) = axis_rotation(0, 10.0 * std::sin(0.2 * t));
       m.translation(t, 0) = Vec3(0.0, 2.0, 0.0);
     }
-    const std::string path = (dir_ / relative).string();
+    const std::string path = dir_ / relative;
+    fs::create_directories(fs::path(path).parent_path());
     write_bvh(path, s, m);
     return path;
   }
 
-  fs::path dir_;
+  testing::TempDir dir_;
 };
 
 TEST_F(Corpus, FindsFilesAndNamesDatasets) {
   write_clip("rigs/a.bvh", 1, 1);
   write_clip("rigs/sub/b.BVH", 1, 2);
-  std::ofstream(dir_ / "rigs" / "notes.txt") << "not a clip";
-  const auto files = find_corpus_files({(dir_ / "rigs").string(), "mine=" + (dir_ / "rigs/a.bvh").string()});
+  dir_.write("rigs/notes.txt", "not a clip");
+  const auto files = find_corpus_files({dir_ / "rigs", "mine=" + (dir_ / "rigs/a.bvh")});
   ASSERT_EQ(files.size(), 3u);
   EXPECT_EQ(files[0].dataset, "rigs");
   EXPECT_EQ(files[1].dataset, "rigs");
   EXPECT_EQ(files[2].dataset, "mine");
-  EXPECT_THROW(find_corpus_files({(dir_ / "missing").string()}), InputError);
-  fs::create_directories(dir_ / "empty");
-  EXPECT_THROW(find_corpus_files({(dir_ / "empty").string()}), InputError);
+  EXPECT_THROW(find_corpus_files({dir_ / "missing"}), InputError);
+  fs::create_directories(dir_.path() / "empty");
+  EXPECT_THROW(find_corpus_files({dir_ / "empty"}), InputError);
 }
 
 TEST_F(Corpus, SidecarCaptionsBadFilesAndSegmentation) {
   const std::string captioned = write_clip("rigs/walk.bvh", 2, 3);
-  std::ofstream(dir_ / "rigs" / "walk.txt") << "a thing waves\nsomething waves an arm\n";
+  dir_.write("rigs/walk.txt", "a thing waves\nsomething waves an arm\n");
   const std::string long_take = write_clip("rigs/long.bvh", 30, 4);
-  std::ofstream(dir_ / "rigs" / "broken.bvh") << "HIERARCHY\nROOT A\n{\n";
+  dir_.write("rigs/broken.bvh", "HIERARCHY\nROOT A\n{\n");
   CorpusOptions options;
   options.threads = 2;
-  const CorpusResult result = load_corpus(find_corpus_files({(dir_ / "rigs").string()}), options);
+  const CorpusResult result = load_corpus(find_corpus_files({dir_ / "rigs"}), options);
   ASSERT_EQ(result.files.size(), 3u);
   // Sorted: broken, long, walk.
   EXPECT_NE(result.files[0].error.find("broken.bvh:"), std::string::npos) << result.files[0].error;

@@ -21,26 +21,10 @@
 namespace nec {
 namespace {
 
+using testing::TempDir;
+
 namespace fs = std::filesystem;
 
-// A fresh directory under the temp dir, removed at the end of the test.
-class TempDir {
- public:
-  TempDir() {
-    std::random_device entropy;
-    path_ = fs::temp_directory_path() / ("nec_test_dataset_" + std::to_string(entropy()) + std::to_string(entropy()));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 std::vector<std::string> canonical_of(const Skeleton& s) {
   std::vector<std::string> out;

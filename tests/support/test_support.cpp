@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 
 namespace nec::testing {
 
@@ -54,6 +55,24 @@ Motion random_motion(std::mt19937& rng, const Skeleton& skeleton, int frames) {
     m.translation(t, 0) = Vec3(position(rng), position(rng), position(rng));
   }
   return m;
+}
+
+TempDir::TempDir() {
+  std::random_device entropy;
+  path_ = std::filesystem::temp_directory_path() / ("nec_test_" + std::to_string(entropy()) + std::to_string(entropy()));
+  std::filesystem::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ignored;
+  std::filesystem::remove_all(path_, ignored);
+}
+
+std::string TempDir::write(const std::string& relative, const std::string& text) const {
+  const std::filesystem::path file = path_ / relative;
+  std::filesystem::create_directories(file.parent_path());
+  std::ofstream(file, std::ios::binary) << text;
+  return file.string();
 }
 
 double max_position_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {

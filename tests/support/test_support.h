@@ -3,6 +3,7 @@
 
 #include "nec/motion/motion.h"
 
+#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
@@ -21,6 +22,25 @@ Quat random_rotation(std::mt19937& rng);
 Skeleton random_skeleton(std::mt19937& rng, int joints);
 // Random local rotations (and root translation) for every frame.
 Motion random_motion(std::mt19937& rng, const Skeleton& skeleton, int frames);
+
+// A fresh folder under the system temp folder, removed with everything in it
+// when the object goes out of scope.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+  // Full path of `relative` inside the folder.
+  std::string operator/(const std::string& relative) const { return (path_ / relative).string(); }
+  // Writes `text` to `relative` (creating folders); returns the full path.
+  std::string write(const std::string& relative, const std::string& text) const;
+
+ private:
+  std::filesystem::path path_;
+};
 
 // Largest distance between corresponding positions of two pose sets.
 double max_position_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b);
