@@ -51,12 +51,18 @@ int run_info(int argc, char** argv) {
   CommandLine cli("nec info", "Print a BVH file's skeleton and motion summary.");
   cli.positional("FILE.bvh", "BVH file to describe");
   cli.flag("--no-tree", "omit the joint tree");
+  cli.flag("--json", "print one JSON line: joints, end_sites, frames, fps, diameter");
   cli.example("nec info /usr/share/assimp/models/BVH/01_01.bvh");
   if (!cli.parse(argc, argv)) return 0;
   const std::string path = cli.positional_value("FILE.bvh");
   const Clip clip = read_bvh(path);
   const Skeleton& s = clip.skeleton;
   const Motion& m = clip.motion;
+  if (cli.is_set("--json")) {
+    fmt::print("{{\"joints\": {}, \"end_sites\": {}, \"frames\": {}, \"fps\": {:.9g}, \"diameter\": {:.9g}}}\n",
+               s.joint_count(), s.end_sites.size(), m.frame_count, m.fps, s.diameter());
+    return 0;
+  }
   fmt::print("file      {}\n", path);
   fmt::print("joints    {} ({} end sites, {} leaves, max depth {})\n", s.joint_count(), s.end_sites.size(),
              s.leaves().size(), [&] {

@@ -6,23 +6,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(
-  build-essential cmake ninja-build ccache pkg-config
-  libtorch-dev libeigen3-dev nlohmann-json3-dev libsentencepiece-dev libfmt-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
-  assimp-testmodels
-)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "setup: installing ${missing[*]}"
-  SUDO=""
-  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+source scripts/lib.sh
+ensure_packages setup build-essential cmake ninja-build ccache pkg-config libtorch-dev libeigen3-dev nlohmann-json3-dev libsentencepiece-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev assimp-testmodels
 
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release ${NEC_CMAKE_ARGS:-}
 cmake --build build --parallel "$(nproc)"

@@ -111,6 +111,23 @@ std::string with_motion(const std::string& motion_part) {
   return head.substr(0, head.find("MOTION")) + motion_part;
 }
 
+// A root with one channel, `joints` joints without channels, `frames` frames of "0".
+std::string joints_without_channels(int joints, int frames) {
+  std::string text = "HIERARCHY\nROOT root\n{\nOFFSET 0 0 0\nCHANNELS 1 Xposition\n";
+  for (int j = 0; j < joints; ++j) text += "JOINT j" + std::to_string(j) + "\n{\nOFFSET 0 0 0\n}\n";
+  text += "}\nMOTION\nFrames: " + std::to_string(frames) + "\nFrame Time: 0.01\n";
+  for (int t = 0; t < frames; ++t) text += "0\n";
+  return text;
+}
+
+// A chain of `depth` + 1 joints, each the child of the one before.
+std::string nested_joints(int depth) {
+  std::string text = "HIERARCHY\nROOT j0\n{\nOFFSET 0 0 0\n";
+  for (int j = 1; j <= depth; ++j) text += "JOINT j" + std::to_string(j) + "\n{\nOFFSET 0 1 0\n";
+  for (int j = 0; j <= depth; ++j) text += "}\n";
+  return text + "MOTION\nFrames: 0\nFrame Time: 0.01\n";
+}
+
 TEST(BvhReader, RejectsBadInputWithFileLineAndReason) {
   const std::string good = kTwoJoints;
   const std::vector<BadCase> cases = {
@@ -131,6 +148,12 @@ TEST(BvhReader, RejectsBadInputWithFileLineAndReason) {
                                        "0 0 0 0 0 0 0 0 0\n"), "file ends after 1 of 3"},
       {"zero frame time", with_motion("MOTION\nFrames: 1\nFrame Time: 0\n0 0 0 0 0 0 0 0 0\n"), "bad frame time"},
       {"duplicate names", "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nJOINT A\n{\nOFFSET 0 0 0\n}\n}\n", "duplicate joint"},
+      // Found by tests/fuzz: the name "A{" was accepted but written back as "A{\n{", which reads as "A".
+      {"brace in name", "HIERARCHY\nROOT A{ {\nOFFSET 0 0 0\n}\n", "ends with '{'"},
+      // 1400 joints without channels and 12000 one-value frames (64 KB) took 1 GB and timed out the fuzzer.
+      {"joints without channels", joints_without_channels(40, 1000), "more joint-frames than"},
+      // 4096 nested joints (220 KB) overflowed the stack under ASan and in a 1 MB thread stack.
+      {"deep nesting", nested_joints(1100), "nested more than 1024 deep"},
   };
   for (const BadCase& c : cases) {
     try {
@@ -197,6 +220,27 @@ TEST(BvhRoundTrip, ChangingTheEulerOrderKeepsTheMotion) {
   const ClipDifference d = compare_clips(clip, back);
   EXPECT_LT(d.rotation, 1e-6);
   EXPECT_LT(d.position, 1e-6);
+}
+
+// Found by tests/fuzz: a joint with two rotation channels (Z then Y) came back
+// as Ry * Rz when written with another Euler order, and 180 degrees off when
+// its Y angle was beyond +-90 (the dropped X angle was 180).
+TEST(BvhRoundTrip, KeepsJointsWithOneOrTwoRotationChannels) {
+  const std::string text =
+      "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n"
+      "JOINT B\n{\nOFFSET 0 1 0\nCHANNELS 2 Zrotation Yrotation\n"
+      "JOINT C\n{\nOFFSET 1 0 0\nCHANNELS 1 Xrotation\nEnd Site\n{\nOFFSET 0 1 0\n}\n}\n}\n}\n"
+      "MOTION\nFrames: 3\nFrame Time: 0.1\n10 20 30 30 40 50\n0 0 0 90 135 -170\n0 0 0 -100 -91 180\n";
+  const Clip clip = parse_bvh(text, "few-channels.bvh");
+  for (const std::optional<EulerOrder> order : {std::optional<EulerOrder>(), std::optional(EulerOrder::YXZ)}) {
+    BvhWriteOptions options;
+    options.euler_order = order;
+    const Clip back = parse_bvh(format_bvh(clip.skeleton, clip.motion, options), "few-channels (rewritten).bvh");
+    EXPECT_EQ(back.skeleton.channels[0].euler_order(), order.value_or(EulerOrder::XYZ));
+    const ClipDifference d = compare_clips(clip, back);
+    EXPECT_LT(d.rotation, 1e-6) << "max rotation difference (rad) " << d.rotation;
+    EXPECT_LT(d.position, 1e-6) << "max relative position difference " << d.position;
+  }
 }
 
 void expect_round_trip(const std::string& path) {

@@ -61,6 +61,10 @@ TEST_F(Cli, InfoDescribesTheFile) {
   EXPECT_NE(run.output.find("2752 at 120 fps"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("Zrotation Yrotation Xrotation"), std::string::npos);
   EXPECT_NE(run.output.find("LeftUpLeg"), std::string::npos);
+  const CommandResult json = run_nec("info --json " + kCmu);
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  EXPECT_NE(json.output.find("{\"joints\": 31, \"end_sites\": 7, \"frames\": 2752, \"fps\": 120.0"), std::string::npos)
+      << json.output;
 }
 
 TEST_F(Cli, BadInputExitsOneWithFileAndLineAndWritesNothing) {

@@ -11,6 +11,7 @@
 namespace nec {
 namespace {
 
+
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 
 // A printable excerpt of untrusted text for error messages.
@@ -129,12 +130,15 @@ class HierarchyParser {
     if (token != "HIERARCHY") lex_.fail("expected 'HIERARCHY' at the start of the file, found " + Lexer::describe(token));
     token = lex_.next();
     if (token != "ROOT") lex_.fail("expected 'ROOT', found " + Lexer::describe(token));
-    parse_joint(-1);
+    parse_joint(-1, 0);
     return std::move(skeleton_);
   }
 
  private:
-  void parse_joint(int parent) {
+  void parse_joint(int parent, int depth) {
+    // Each level is a stack frame here and in the writer: a deep chain from a
+    // small file must not overflow the stack (ASan or a 1 MB thread stack did at 4096).
+    if (depth > limits_.max_depth) lex_.fail("joints nested more than " + std::to_string(limits_.max_depth) + " deep");
     std::string_view name = lex_.rest_of_line();
     bool brace_on_name_line = false;
     if (!name.empty() && name.back() == '{') {
@@ -143,6 +147,8 @@ class HierarchyParser {
       brace_on_name_line = true;
     }
     if (name.empty()) lex_.fail("joint without a name");
+    // "A{ {" cannot be told apart from "A {" once written back.
+    if (name.back() == '{') lex_.fail("joint name '" + excerpt(name) + "' ends with '{'");
     if (skeleton_.joint_count() >= limits_.max_joints) {
       lex_.fail("more than " + std::to_string(limits_.max_joints) + " joints");
     }
@@ -160,7 +166,7 @@ class HierarchyParser {
       } else if (token == "CHANNELS") {
         parse_channels(joint);
       } else if (token == "JOINT") {
-        parse_joint(joint);
+        parse_joint(joint, depth + 1);
       } else if (token == "End") {
         lex_.expect("Site");
         parse_end_site(joint);
@@ -255,6 +261,17 @@ class MotionParser {
       throw InputError(lex_.name(), frames_line_,
                        "declares " + std::to_string(frames) + " frames of " + std::to_string(channel_count) +
                            " channels, but only " + std::to_string(remaining) + " bytes of motion data follow");
+    }
+    // Joints without channels take no text but a quaternion and a translation
+    // per frame: bound the memory by the text too (real files have well under
+    // one joint-frame per byte; a 64 KB file asked for 1 GB).
+    const double joint_frames = static_cast<double>(frames) * skeleton.joint_count();
+    if (joint_frames > limits_.max_joint_frames_per_byte * static_cast<double>(remaining) + skeleton.joint_count()) {
+      throw InputError(lex_.name(), frames_line_,
+                       "declares " + std::to_string(frames) + " frames of " + std::to_string(skeleton.joint_count()) +
+                           " joints, more joint-frames than " + std::to_string(remaining) +
+                           " bytes of motion data can describe (at most " +
+                           std::to_string(static_cast<int>(limits_.max_joint_frames_per_byte)) + " per byte)");
     }
 
     Motion motion;
@@ -391,6 +408,31 @@ void append_vec(std::string& out, const Vec3& v) {
   }
 }
 
+// Angle in (-180, 180].
+double wrap_degrees(double degrees) {
+  const double wrapped = std::remainder(degrees, 360.0);
+  return wrapped == -180.0 ? 180.0 : wrapped;
+}
+
+// Euler angles of `rotation` for the rotation channels of `layout`. A layout
+// with fewer than 3 rotation channels drops the trailing angles, so of the two
+// equivalent triples (a, b, c) and (a + 180, 180 - b, c + 180) it takes the one
+// whose dropped angles are nearer 0: a Z-then-Y joint at Y = 135 is
+// (Z + 180, 45, X = 180) in the first and (Z, 135, 0) in the second.
+Vec3 channel_euler(const Quat& rotation, const ChannelLayout& layout) {
+  const Vec3 euler = quat_to_euler(rotation, layout.euler_order());
+  const int kept = layout.rotation_count();
+  if (kept == 3) return euler;
+  const Vec3 other(wrap_degrees(euler[0] + 180.0), wrap_degrees(180.0 - euler[1]), wrap_degrees(euler[2] + 180.0));
+  double dropped = 0.0;
+  double other_dropped = 0.0;
+  for (int k = kept; k < 3; ++k) {
+    dropped += std::abs(euler[k]);
+    other_dropped += std::abs(other[k]);
+  }
+  return other_dropped < dropped ? other : euler;
+}
+
 class Writer {
  public:
   Writer(const Skeleton& skeleton, const BvhWriteOptions& options)
@@ -419,7 +461,7 @@ class Writer {
       for (int j : order_) {
         const ChannelLayout& layout = layouts_[j];
         if (layout.count == 0) continue;
-        const Vec3 euler = quat_to_euler(motion.rotation(t, j), layout.euler_order());
+        const Vec3 euler = channel_euler(motion.rotation(t, j), layout);
         const Vec3& translation = motion.translation(t, j);
         int rotation_index = 0;
         for (int c = 0; c < layout.count; ++c) {

@@ -20,6 +20,8 @@ namespace nec {
 
 struct BvhLimits {
   int max_joints = 4096;          // more joints than this is rejected
+  int max_depth = 1024;           // deepest joint nesting (root = 0); bounds the reader's and writer's recursion
+  double max_joint_frames_per_byte = 16.0;  // joint-frames one byte of motion text may describe (real files: ~0.05)
   double min_frame_time = 1e-5;   // seconds; 100 kHz
   double max_frame_time = 10.0;   // seconds
 };
@@ -29,7 +31,7 @@ Clip parse_bvh(std::string_view text, const std::string& name, const BvhLimits& 
 Clip read_bvh(const std::string& path, const BvhLimits& limits = {});
 
 struct BvhWriteOptions {
-  std::optional<EulerOrder> euler_order;  // rewrite every joint's rotations in this order
+  std::optional<EulerOrder> euler_order;  // rewrite the rotations of every joint with 3 rotation channels in this order
 };
 
 std::string format_bvh(const Skeleton& skeleton, const Motion& motion, const BvhWriteOptions& options = {});

@@ -6,7 +6,9 @@
 // Rotations are local and relative to the rest pose (BVH semantics). The
 // translation of a joint is its local position in the parent frame: the rest
 // offset for joints without position channels, the channel values otherwise
-// (position channels replace the offset, as Blender and three.js read them).
+// (position channels replace the offset, as Blender and MotionBuilder read
+// them; three.js BVHLoader adds the offset, which agrees only when the offset
+// of a joint with position channels is zero, as nec's normalized output is).
 #pragma once
 
 #include "nec/motion/skeleton.h"
