@@ -13,6 +13,18 @@ void check_sizes(const Skeleton& skeleton, const Motion& motion) {
   }
 }
 
+// Global rotations and positions of one frame from its local rotations and translations.
+inline void forward_kinematics_frame(const int* parents, int joints, const Quat* local, const Vec3* translation,
+                                     Quat* global, Vec3* position) {
+  global[0] = local[0];
+  position[0] = translation[0];
+  for (int j = 1; j < joints; ++j) {
+    const int p = parents[j];
+    global[j] = global[p] * local[j];
+    position[j] = position[p] + global[p] * translation[j];
+  }
+}
+
 }  // namespace
 
 Pose forward_kinematics(const Skeleton& skeleton, const Motion& motion) {
@@ -26,17 +38,8 @@ Pose forward_kinematics(const Skeleton& skeleton, const Motion& motion) {
   const int* parents = skeleton.parents.data();
   for (int t = 0; t < motion.frame_count; ++t) {
     const size_t base = static_cast<size_t>(t) * joints;
-    const Quat* local = motion.rotations.data() + base;
-    const Vec3* translation = motion.translations.data() + base;
-    Quat* global = pose.rotations.data() + base;
-    Vec3* position = pose.positions.data() + base;
-    global[0] = local[0];
-    position[0] = translation[0];
-    for (int j = 1; j < joints; ++j) {
-      const int p = parents[j];
-      global[j] = global[p] * local[j];
-      position[j] = position[p] + global[p] * translation[j];
-    }
+    forward_kinematics_frame(parents, joints, motion.rotations.data() + base, motion.translations.data() + base,
+                             pose.rotations.data() + base, pose.positions.data() + base);
   }
   return pose;
 }
@@ -49,16 +52,8 @@ void joint_positions(const Skeleton& skeleton, const Motion& motion, std::vector
   const int* parents = skeleton.parents.data();
   for (int t = 0; t < motion.frame_count; ++t) {
     const size_t base = static_cast<size_t>(t) * joints;
-    const Quat* local = motion.rotations.data() + base;
-    const Vec3* translation = motion.translations.data() + base;
-    Vec3* position = positions.data() + base;
-    global[0] = local[0];
-    position[0] = translation[0];
-    for (int j = 1; j < joints; ++j) {
-      const int p = parents[j];
-      global[j] = global[p] * local[j];
-      position[j] = position[p] + global[p] * translation[j];
-    }
+    forward_kinematics_frame(parents, joints, motion.rotations.data() + base, motion.translations.data() + base,
+                             global.data(), positions.data() + base);
   }
 }
 
