@@ -9,5 +9,7 @@ cd "$(dirname "$0")/.."
 source scripts/lib.sh
 ensure_packages setup build-essential cmake ninja-build ccache pkg-config libtorch-dev libeigen3-dev nlohmann-json3-dev libsentencepiece-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev assimp-testmodels
 
+scripts/setup_viewer_assets.sh
+
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release ${NEC_CMAKE_ARGS:-}
 cmake --build build --parallel "$(nproc)"
