@@ -1,0 +1,258 @@
+// Multi-level zoo captions: true to the spec (species, turn direction, speed
+// words, start/stop, gait detail), three levels of detail, many phrasings,
+// deterministic.
+#include "nec/zoo/zoo_captions.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+#include <sstream>
+
+namespace nec::zoo {
+namespace {
+
+// Lower-case words of a caption, punctuation removed.
+std::vector<std::string> words_of(const std::string& text) {
+  std::string cleaned;
+  for (char c : text) cleaned += std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : ' ';
+  std::vector<std::string> words;
+  std::stringstream stream(cleaned);
+  for (std::string w; stream >> w;) words.push_back(w);
+  return words;
+}
+
+bool has_word(const std::string& text, const std::string& word) {
+  const auto words = words_of(text);
+  return std::find(words.begin(), words.end(), word) != words.end();
+}
+
+bool has_any(const std::string& text, const std::vector<std::string>& stems) {
+  for (const std::string& w : words_of(text)) {
+    for (const std::string& stem : stems) {
+      if (w.rfind(stem, 0) == 0) return true;
+    }
+  }
+  return text.find("high speed") != std::string::npos && std::find(stems.begin(), stems.end(), "high") != stems.end();
+}
+
+const std::vector<std::string> kSlowWords = {"slow", "leisurely", "unhurried", "stroll", "amble", "plod"};
+const std::vector<std::string> kFastWords = {"quick", "fast", "rapid", "high", "sprint", "dash", "rac", "scurr", "skitter"};
+
+// Many specs over every plan and action, with the spec the synthesizer makes.
+struct Case {
+  Creature creature;
+  MotionSpec spec;
+};
+
+std::vector<Case> all_cases() {
+  std::vector<Case> cases;
+  for (BodyPlan plan : kAllBodyPlans) {
+    for (uint64_t seed = 0; seed < 3; ++seed) {
+      const Creature creature = make_creature(plan, seed);
+      int k = 0;
+      for (Action action : supported_actions(plan)) {
+        for (double ratio : {0.5, 1.0, 2.0}) {
+          MotionSpec spec;
+          spec.action = action;
+          spec.seed = seed * 100 + k;
+          spec.speed = typical_speed(creature, action) * ratio;
+          spec.turn_rate = (k % 5 - 2) * 25.0;
+          spec.start_from_still = k % 2 == 0;
+          spec.stop_at_end = k % 3 == 0;
+          spec.side = k % 2 ? Side::Left : Side::Right;
+          cases.push_back({creature, synthesize_motion(creature, spec).spec});
+          ++k;
+        }
+      }
+    }
+  }
+  return cases;
+}
+
+class ZooCaptions : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { cases_ = new std::vector<Case>(all_cases()); }
+  static void TearDownTestSuite() {
+    delete cases_;
+    cases_ = nullptr;
+  }
+  static std::vector<Case>* cases_;
+};
+std::vector<Case>* ZooCaptions::cases_ = nullptr;
+
+TEST_F(ZooCaptions, EveryLevelNamesTheSpeciesAndAddsDetail) {
+  for (const Case& c : *cases_) {
+    for (uint64_t phrasing = 0; phrasing < 4; ++phrasing) {
+      const Captions captions = caption_motion(c.creature, c.spec, phrasing);
+      for (const std::string& line : captions.lines()) {
+        EXPECT_TRUE(has_word(line, c.creature.species)) << line;
+        EXPECT_EQ(line.find('\n'), std::string::npos);
+        EXPECT_FALSE(line.empty());
+      }
+      EXPECT_LT(words_of(captions.short_text).size(), words_of(captions.long_text).size()) << captions.long_text;
+      EXPECT_LE(words_of(captions.short_text).size(), words_of(captions.mid_text).size() + 1) << captions.mid_text;
+      EXPECT_LT(words_of(captions.mid_text).size(), words_of(captions.long_text).size()) << captions.long_text;
+    }
+  }
+}
+
+TEST_F(ZooCaptions, TurnsAreNamedWithTheRightSide) {
+  int left = 0, right = 0, straight = 0;
+  for (const Case& c : *cases_) {
+    for (uint64_t phrasing = 0; phrasing < 4; ++phrasing) {
+      const Captions captions = caption_motion(c.creature, c.spec, phrasing);
+      const TurnClass turn = classify_turn(c.spec);
+      const bool attack = c.spec.action == Action::Attack && c.creature.plan == BodyPlan::Biped;
+      for (const std::string& line : {captions.mid_text, captions.long_text}) {
+        if (attack) {
+          // The punching arm, not a turn.
+          EXPECT_TRUE(has_word(line, c.spec.side == Side::Left ? "left" : "right")) << line;
+          EXPECT_FALSE(has_word(line, c.spec.side == Side::Left ? "right" : "left")) << line;
+        } else if (turn == TurnClass::Straight) {
+          EXPECT_FALSE(has_word(line, "left") || has_word(line, "right")) << line << " (turn rate " << c.spec.turn_rate << ")";
+          ++straight;
+        } else if (c.spec.turn_rate > 0) {
+          EXPECT_TRUE(has_word(line, "left")) << line;
+          EXPECT_FALSE(has_word(line, "right")) << line << " (turn rate " << c.spec.turn_rate << ")";
+          ++left;
+        } else {
+          EXPECT_TRUE(has_word(line, "right")) << line;
+          EXPECT_FALSE(has_word(line, "left")) << line << " (turn rate " << c.spec.turn_rate << ")";
+          ++right;
+        }
+      }
+      EXPECT_FALSE(has_word(captions.short_text, "left") && has_word(captions.short_text, "right"));
+    }
+  }
+  EXPECT_GT(left, 0);
+  EXPECT_GT(right, 0);
+  EXPECT_GT(straight, 0);
+}
+
+TEST_F(ZooCaptions, SpeedWordsMatchTheSpeed) {
+  int slow = 0, fast = 0, normal = 0;
+  for (const Case& c : *cases_) {
+    const Action action = c.spec.action;
+    if (!is_locomotion(action) || action == Action::Turn) continue;
+    const SpeedClass speed = classify_speed(c.spec.speed, typical_speed(c.creature, action));
+    for (uint64_t phrasing = 0; phrasing < 6; ++phrasing) {
+      const Captions captions = caption_motion(c.creature, c.spec, phrasing);
+      for (const std::string& line : {captions.mid_text, captions.long_text}) {
+        if (speed == SpeedClass::Slow) {
+          EXPECT_TRUE(has_any(line, kSlowWords)) << line;
+          EXPECT_FALSE(has_any(line, kFastWords)) << line;
+          ++slow;
+        } else if (speed == SpeedClass::Fast) {
+          EXPECT_TRUE(has_any(line, kFastWords)) << line;
+          EXPECT_FALSE(has_any(line, kSlowWords)) << line;
+          ++fast;
+        } else {
+          EXPECT_FALSE(has_any(line, kSlowWords) || has_any(line, kFastWords)) << line;
+          ++normal;
+        }
+      }
+      // The short caption may only use a speed verb that agrees.
+      if (speed != SpeedClass::Fast) {
+        EXPECT_FALSE(has_any(captions.short_text, kFastWords)) << captions.short_text;
+      }
+      if (speed != SpeedClass::Slow) {
+        EXPECT_FALSE(has_any(captions.short_text, kSlowWords)) << captions.short_text;
+      }
+    }
+  }
+  EXPECT_GT(slow, 0);
+  EXPECT_GT(fast, 0);
+  EXPECT_GT(normal, 0);
+}
+
+TEST_F(ZooCaptions, LongCaptionTellsStartStopAndGait) {
+  for (const Case& c : *cases_) {
+    const Captions captions = caption_motion(c.creature, c.spec, 5);
+    const std::string& text = captions.long_text;
+    const bool travels = is_locomotion(c.spec.action);
+    if (travels && c.spec.start_from_still) {
+      EXPECT_TRUE(has_any(text, {"still", "standstill", "hover", "motionless"})) << text;
+    }
+    if (travels && !c.spec.start_from_still) {
+      EXPECT_FALSE(has_any(text, {"standstill"})) << text;
+    }
+    if (travels && c.spec.stop_at_end) {
+      EXPECT_TRUE(has_any(text, {"stop", "halt", "holds"})) << text;
+    }
+    if (!c.spec.stop_at_end) {
+      EXPECT_FALSE(has_any(text, {"stop", "halt"})) << text;
+    }
+    if (c.creature.plan == BodyPlan::Hexapod && is_gait(c.spec.action)) {
+      EXPECT_TRUE(text.find("tripod") != std::string::npos || text.find("three legs") != std::string::npos) << text;
+    }
+    if ((c.creature.plan == BodyPlan::Spider || c.creature.plan == BodyPlan::Centipede) && is_gait(c.spec.action)) {
+      EXPECT_TRUE(text.find("wave") != std::string::npos || text.find("behind it") != std::string::npos) << text;
+    }
+    if (c.spec.action == Action::Trot) {
+      EXPECT_NE(text.find("diagonal"), std::string::npos) << text;
+    }
+  }
+}
+
+TEST_F(ZooCaptions, JumpsSayForwardOrInPlace) {
+  const Creature dog = make_creature(BodyPlan::Quadruped, 1);
+  MotionSpec spec;
+  spec.action = Action::Jump;
+  spec.speed = 0.0;
+  for (uint64_t phrasing = 0; phrasing < 8; ++phrasing) {
+    const std::string mid = caption_motion(dog, synthesize_motion(dog, spec).spec, phrasing).mid_text;
+    EXPECT_TRUE(has_any(mid, {"place", "straight", "spot"})) << mid;
+    EXPECT_FALSE(has_any(mid, {"forward", "ahead"})) << mid;
+  }
+  spec.speed = typical_speed(dog, Action::Jump);
+  for (uint64_t phrasing = 0; phrasing < 8; ++phrasing) {
+    const std::string mid = caption_motion(dog, synthesize_motion(dog, spec).spec, phrasing).mid_text;
+    EXPECT_TRUE(has_any(mid, {"forward", "ahead"})) << mid;
+  }
+}
+
+TEST(ZooCaptionsBasics, ManyPhrasingsAndDeterministic) {
+  const Creature spider = make_creature(BodyPlan::Spider, 7);
+  MotionSpec spec;
+  spec.action = Action::Walk;
+  spec.speed = 1.6 * typical_speed(spider, Action::Walk);
+  spec.turn_rate = 40.0;
+  spec.start_from_still = true;
+  spec = synthesize_motion(spider, spec).spec;
+  std::set<std::string> shorts, mids, longs;
+  for (uint64_t phrasing = 0; phrasing < 60; ++phrasing) {
+    const Captions c = caption_motion(spider, spec, phrasing);
+    shorts.insert(c.short_text);
+    mids.insert(c.mid_text);
+    longs.insert(c.long_text);
+    const Captions again = caption_motion(spider, spec, phrasing);
+    EXPECT_EQ(c.lines(), again.lines());
+  }
+  std::printf("60 phrasings: %zu short, %zu mid, %zu long distinct; e.g. \"%s\"\n", shorts.size(), mids.size(), longs.size(),
+              longs.begin()->c_str());
+  EXPECT_GE(shorts.size(), 4u);
+  EXPECT_GE(mids.size(), 15u);
+  EXPECT_GE(longs.size(), 30u);
+}
+
+TEST(ZooCaptionsBasics, TurnClasses) {
+  MotionSpec spec;
+  spec.action = Action::Walk;
+  spec.turn_rate = 3.0;
+  EXPECT_EQ(classify_turn(spec), TurnClass::Straight);
+  spec.turn_rate = -20.0;
+  EXPECT_EQ(classify_turn(spec), TurnClass::Veer);
+  spec.turn_rate = 50.0;
+  EXPECT_EQ(classify_turn(spec), TurnClass::Turn);
+  spec.turn_rate = 100.0;  // 400 degrees over 4 s
+  EXPECT_EQ(classify_turn(spec), TurnClass::Circle);
+  spec.action = Action::Idle;
+  EXPECT_EQ(classify_turn(spec), TurnClass::Straight);
+  const Creature fish = make_creature(BodyPlan::Fish, 0);
+  spec.action = Action::Walk;
+  EXPECT_THROW(caption_motion(fish, spec, 0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace nec::zoo
