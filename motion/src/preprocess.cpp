@@ -9,7 +9,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
 namespace nec {
 namespace {
@@ -180,38 +179,35 @@ UpAxis detect_up_axis(const Clip& clip) {
   const double diameter = std::max(s.diameter(), 1e-12);
   auto position = [&](int t, int j) -> const Vec3& { return positions[static_cast<size_t>(t) * joints + j]; };
 
-  // 1. Feet hang below the root along the up axis.
+  // Feet hang below the root along the up axis.
   std::vector<int> feet;
   for (int j = 1; j < joints; ++j) {
     const std::string name = canonical_joint_name(s.names[j]);
     if (name.find("foot") != std::string::npos || name.find("toe") != std::string::npos) feet.push_back(j);
   }
   if (!feet.empty()) {
-    Vec3 below = Vec3::Zero();
+    // Along the up axis the feet are below the root in nearly every frame;
+    // along a horizontal axis they lie on both sides (left and right, front
+    // and back) or level with it. `side` is (below - above) / pairs. Y stays
+    // unless Z is clearly the up axis and Y clearly is not.
+    const double margin = 0.02 * diameter;
+    double side_y = 0.0, side_z = 0.0;
     for (int t = 0; t < frames; ++t) {
-      for (int f : feet) below += position(t, f) - position(t, 0);
+      for (int f : feet) {
+        const Vec3 down = position(t, 0) - position(t, f);
+        side_y += (down.y() > margin) - (down.y() < -margin);
+        side_z += (down.z() > margin) - (down.z() < -margin);
+      }
     }
-    below /= static_cast<double>(frames) * feet.size() * diameter;
-    if (below.z() < -0.1 && below.z() < 2.0 * below.y()) return UpAxis::Z;
-    if (below.y() < -0.1) return UpAxis::Y;
+    const double pairs = static_cast<double>(frames) * feet.size();
+    side_y /= pairs;
+    side_z /= pairs;
+    if (side_z > 0.8 && side_y < 0.3) return UpAxis::Z;
+    if (side_y > 0.5) return UpAxis::Y;
   }
-  // 2. Along the up axis the lowest joint stays level (the ground); along a
-  // horizontal axis it drifts as the creature travels.
-  auto lowest_spread = [&](int axis) {
-    std::vector<double> lowest(frames);
-    for (int t = 0; t < frames; ++t) {
-      double low = position(t, 0)[axis];
-      for (int j = 1; j < joints; ++j) low = std::min(low, position(t, j)[axis]);
-      lowest[t] = low;
-    }
-    const double mean = std::accumulate(lowest.begin(), lowest.end(), 0.0) / std::max(frames, 1);
-    double variance = 0.0;
-    for (double v : lowest) variance += (v - mean) * (v - mean);
-    return std::sqrt(variance / std::max(frames, 1)) / diameter;
-  };
-  const double spread_y = lowest_spread(1);
-  const double spread_z = lowest_spread(2);
-  return (spread_y > 0.05 && spread_y > 3.0 * spread_z) ? UpAxis::Z : UpAxis::Y;
+  // Without named feet there is no reliable cue (jumps and flight move the
+  // lowest joint as much as travel does): keep the BVH convention, +Y up.
+  return UpAxis::Y;
 }
 
 Motion resample(const Motion& motion, double fps) {

@@ -61,8 +61,8 @@ void merge_dummy_root(Clip& clip, PreprocessReport& report);
 // Step 2: returns false (and sets report.rejection) if a non-root joint's
 // translation varies by more than tolerance × diameter.
 bool fold_joint_translations(Clip& clip, double tolerance, PreprocessReport& report);
-// Step 6: which file axis points up (Y or Z): the one feet hang below the root
-// along; without named feet, the one along which the lowest joint stays level.
+// Step 6: which file axis points up (Y or Z): Z only when the joints named
+// foot/toe hang below the root along Z and not along Y; otherwise Y.
 UpAxis detect_up_axis(const Clip& clip);
 // Step 7: slerp/lerp resampling to `fps`.
 Motion resample(const Motion& motion, double fps);
