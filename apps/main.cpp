@@ -18,6 +18,7 @@ struct Subcommand {
 };
 
 constexpr Subcommand kSubcommands[] = {
+    {"demo", nec::app::run_demo, "run the pipeline on built-in data (zoo + Debian's CMU files) into out/demo"},
     {"info", nec::app::run_info, "print a BVH file's skeleton, channels, frames and diameter"},
     {"convert", nec::app::run_convert, "read a BVH file and write it back (optionally in another Euler order)"},
     {"normalize", nec::app::run_normalize, "apply the unified preprocessing and write the result"},

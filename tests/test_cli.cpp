@@ -110,5 +110,24 @@ TEST_F(Cli, NormalizeAndAugmentWriteReadableFiles) {
   }
 }
 
+TEST_F(Cli, DemoWritesCacheBvhStripsAndPages) {
+  const CommandResult run = run_nec("demo --creatures 3 --clips-per-creature 2 --out " + path("demo"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (const std::string row : {"| biped | ", "| quadruped | ", "| hexapod | ", "| cmu (real) | "}) {
+    EXPECT_NE(run.output.find(row), std::string::npos) << row << "\n" << run.output;
+  }
+  EXPECT_TRUE(fs::exists(path("demo/cache/manifest.json")));
+  int strips = 0;
+  for (const auto& entry : fs::directory_iterator(path("demo/strips"))) strips += entry.path().extension() == ".png";
+  EXPECT_EQ(strips, 4);  // three zoo creatures and one CMU clip
+  // Every written BVH reads back.
+  int bvh = 0;
+  for (const auto& entry : fs::directory_iterator(path("demo/bvh"))) {
+    EXPECT_NO_THROW(read_bvh(entry.path().string())) << entry.path();
+    ++bvh;
+  }
+  EXPECT_EQ(bvh, 4 * 5);  // normalized + four augmentations each
+}
+
 }  // namespace
 }  // namespace nec
