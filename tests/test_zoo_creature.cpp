@@ -270,6 +270,66 @@ TEST(ZooCreature, CrouchingLowersTheBody) {
   }
 }
 
+// The feet stand under the body in every rest pose: the root's ground
+// projection is inside the support polygon, a crouch bends the knees forward
+// without pushing the feet ahead of the body (a creature leaning back).
+TEST(ZooCreature, FeetStandUnderTheBody) {
+  for (BodyPlan plan : kAllBodyPlans) {
+    for (RestPose pose : kAllPoses) {
+      for (uint64_t seed = 0; seed < 20; ++seed) {
+        CreatureOptions options = sample_creature_options(plan, seed);
+        options.rest_pose = pose;
+        const Creature c = make_creature(plan, seed, options);
+        const std::vector<const Limb*> legs = c.limbs_of(LimbKind::Leg);
+        if (legs.empty()) continue;
+        const RestPositions rest = rest_positions(c.skeleton);
+        const double size = c.skeleton.diameter();
+        const Vec3 root = rest.joints[0];
+        Vec3 centroid = Vec3::Zero();
+        for (const Limb* leg : legs) centroid += rest.joints[leg->joints.back()];
+        centroid /= static_cast<double>(legs.size());
+        const double ahead = (centroid.z() - root.z()) / size;  // feet ahead of the root, diameters
+        const double front = (rest.joints[legs.front()->joints.back()].z() - root.z()) / size;
+        const double hind = (rest.joints[legs.back()->joints.back()].z() - root.z()) / size;
+        const bool crouched = pose == RestPose::Crouched;
+        const std::string where = plan_name(plan) + " pose " + std::to_string(static_cast<int>(pose)) + " seed " +
+                                  std::to_string(seed) + ": feet " + std::to_string(ahead) + " diameters ahead";
+        EXPECT_NEAR(centroid.x(), root.x(), 1e-9 * size) << where;
+        switch (plan) {
+          case BodyPlan::Biped:
+            // Straight legs put the ankle under the hip and the tip (the ball
+            // of a flat foot) a foot length ahead; a crouch stands on it.
+            EXPECT_LE(std::abs(ahead), crouched ? 0.05 : 0.12) << where;
+            break;
+          case BodyPlan::Bird:
+            EXPECT_LE(std::abs(ahead), 0.05) << where;
+            break;
+          case BodyPlan::Quadruped:
+          case BodyPlan::Dragon:
+            // The root is the hips: the hind feet under (a crouch: behind)
+            // them, the front feet well ahead, under the chest.
+            EXPECT_LE(hind, crouched ? 0.0 : 0.12) << where;
+            EXPECT_GT(front, 0.1) << where;
+            EXPECT_GT(ahead, 0.05) << where;
+            EXPECT_LT(ahead, 0.35) << where;
+            if (crouched) {  // each foot under its hip or shoulder
+              for (const Limb* leg : legs) {
+                const double off = rest.joints[leg->joints.back()].z() - rest.joints[leg->joints.front()].z();
+                EXPECT_LE(std::abs(off), 0.02 * size) << where;
+              }
+            }
+            break;
+          default:  // arthropods: the root in the middle of the legs
+            EXPECT_LE(std::abs(ahead), 0.1) << where;
+            EXPECT_GT(front, 0.05) << where;
+            EXPECT_LT(hind, -0.05) << where;
+            break;
+        }
+      }
+    }
+  }
+}
+
 TEST(ZooCreature, ArmsAndWingsFollowTheRestPose) {
   for (BodyPlan plan : {BodyPlan::Biped, BodyPlan::Bird, BodyPlan::Dragon}) {
     for (uint64_t seed = 0; seed < 10; ++seed) {

@@ -359,11 +359,38 @@ struct LegShape {
   double end_length = 0.0;              // length of that end site, in the bones' units
 };
 
+// A bone's lean (degrees from straight down towards `out`) when the leg splays
+// `splay` degrees further out. Bones leaning out stay between straight down and
+// (almost) straight up; a bone leaning back (negative: a vertebrate's shin
+// going down and back from a knee bent forward) keeps its lean, it never splays.
+double bone_lean(const LegBone& bone, double splay) {
+  return bone.degrees < 0.0 ? std::max(bone.degrees, -178.0) : std::clamp(bone.degrees + splay, 0.0, 178.0);
+}
+
 // How far down the leg reaches when every bone leans `splay` degrees further out.
 double leg_drop(const std::vector<LegBone>& bones, double splay = 0.0) {
   double drop = 0.0;
-  for (const LegBone& bone : bones) drop += bone.length * std::cos(radians(std::clamp(bone.degrees + splay, 0.0, 178.0)));
+  for (const LegBone& bone : bones) drop += bone.length * std::cos(radians(bone_lean(bone, splay)));
   return drop;
+}
+
+// Turns the whole leg about its hip, every bone by the same angle (so each
+// joint keeps its bend), until the last joint is `ahead` (bone units, negative:
+// behind) in front of the hip along the leg's `out` direction. A crouch bends
+// the knees forward and the ankles back; this keeps the foot under the body
+// instead of wherever the bends happen to put it.
+void turn_leg_to_reach(std::vector<LegBone>& bones, double ahead) {
+  double along = 0.0, down = 0.0;
+  for (const LegBone& bone : bones) {
+    along += bone.length * std::sin(radians(bone.degrees));
+    down += bone.length * std::cos(radians(bone.degrees));
+  }
+  // Turned by t: along cos t + down sin t = reach sin(t + phase).
+  const double reach = std::hypot(along, down);
+  if (!(reach > 0.0)) return;
+  const double phase = std::atan2(along, down);
+  const double turn = std::asin(std::clamp(ahead / reach, -1.0, 1.0)) - phase;
+  for (LegBone& bone : bones) bone.degrees += turn * 180.0 / kPi;
 }
 
 double leg_length(const std::vector<LegBone>& bones) {
@@ -396,7 +423,7 @@ std::vector<int> add_leg(Body& body, int parent, const Vec3& hip, LegShape shape
   const double scale = target / drop;
   std::vector<Vec3> steps;
   for (const LegBone& bone : shape.bones) {
-    steps.push_back(down_toward(shape.out, std::clamp(bone.degrees + splay, 0.0, 178.0)) * (bone.length * scale));
+    steps.push_back(down_toward(shape.out, bone_lean(bone, splay)) * (bone.length * scale));
   }
   std::vector<Vec3> points = walk(hip, steps);
   points.back().y() = 0.0;
@@ -478,18 +505,23 @@ void build_biped(Body& body, Random& rng, RestPose pose) {
   const double forearm = height * rng.uniform(0.14, 0.16);
   const double hand = height * rng.uniform(0.09, 0.11);
 
+  // Crouched: the knee bends forward and the ankle back (85 degrees at the
+  // knee), then the bent leg turns about the hip so that the foot (its last
+  // joint) stands under the hips, as a crouching person balances.
   LegShape leg;
   const double foot_degrees = crouched ? 75.0 : 68.0;
-  const LegBone thigh_bone{thigh, crouched ? 55.0 : 0.0};
+  const LegBone thigh_bone{thigh, crouched ? 50.0 : 0.0};
+  const double shin_degrees = crouched ? -35.0 : 0.0;
   if (toes) {
     leg.joints = leg_specs({Part::UpperLeg, Part::LowerLeg, Part::Foot, Part::Toe}, "", 0);
-    leg.bones = {thigh_bone, {shin, crouched ? -50.0 : 0.0}, {foot, foot_degrees}};
+    leg.bones = {thigh_bone, {shin, shin_degrees}, {foot, foot_degrees}};
     leg.end_length = toe;
   } else {
     leg.joints = leg_specs({Part::UpperLeg, Part::LowerLeg, Part::Foot}, "", 0);
-    leg.bones = {thigh_bone, {shin + foot * std::cos(radians(foot_degrees)), crouched ? -50.0 : 0.0}};
+    leg.bones = {thigh_bone, {shin + foot * std::cos(radians(foot_degrees)), shin_degrees}};
     leg.end_length = foot + toe;
   }
+  if (crouched) turn_leg_to_reach(leg.bones, 0.0);  // the hips are right above the root
   const double root_height = hip_drop + leg_drop(leg.bones);
   const Vec3 root_position(0.0, root_height, 0.0);
   body.add(spec(Part::Hips), -1, root_position);
@@ -593,11 +625,13 @@ void build_four_legged(Body& body, Random& rng, RestPose pose, const FourLegged&
   const double front_ratio = rng.uniform(0.95, 1.1);  // front leg / hind leg
   const double wing = leg * rng.uniform(2.0, 2.8);     // wing root to tip
 
-  // Hind leg: thigh, shin, metatarsus; toes forward on the ground.
+  // Hind leg: thigh, shin, metatarsus; toes forward on the ground. Crouched:
+  // stifle forward, hock back, then the bent leg turned about the hip so that
+  // the foot stands right under it (just behind the root).
   LegShape hind;
-  hind.bones = {{0.36 * leg, crouched ? 45.0 : 0.0},
-                {0.36 * leg, crouched ? -60.0 : 0.0},
-                {0.28 * leg, crouched ? sp.foot_degrees + 10.0 : sp.foot_degrees}};
+  hind.bones = {{0.36 * leg, crouched ? 50.0 : 0.0},
+                {0.36 * leg, crouched ? -50.0 : 0.0},
+                {0.28 * leg, crouched ? std::min(sp.foot_degrees + 10.0, 45.0) : sp.foot_degrees}};
   hind.end_length = (sp.foot_degrees > 45 ? 0.12 : 0.08) * leg;
   if (toes) {
     hind.joints = leg_specs({Part::UpperLeg, Part::LowerLeg, Part::Foot, Part::Toe}, "hind", 0);
@@ -606,6 +640,7 @@ void build_four_legged(Body& body, Random& rng, RestPose pose, const FourLegged&
     hind.bones[1].length += hind.bones[2].length;
     hind.bones.pop_back();
   }
+  if (crouched) turn_leg_to_reach(hind.bones, 0.0);
   const double root_height = hip_drop + leg_drop(hind.bones);
   const Vec3 root_position(0.0, root_height, 0.0);
   body.add(spec(Part::Hips), -1, root_position);
@@ -647,6 +682,7 @@ void build_four_legged(Body& body, Random& rng, RestPose pose, const FourLegged&
   body.limb(LimbKind::Tail, Side::None, 0, tail_joints);
 
   // Front leg: scapula from the withers down and forward, then humerus, radius, metacarpus.
+  // Crouched: elbow back, wrist forward, turned so that the forefoot stands under the withers.
   LegShape front;
   const double front_foot = crouched ? sp.foot_degrees + 5.0 : std::max(0.0, sp.foot_degrees - 5.0);
   front.bones = {{0.22 * leg, crouched ? 40.0 : 30.0},
@@ -661,6 +697,7 @@ void build_four_legged(Body& body, Random& rng, RestPose pose, const FourLegged&
     front.bones[2].length += front.bones[3].length;
     front.bones.pop_back();
   }
+  if (crouched) turn_leg_to_reach(front.bones, 0.0);
   front.joints[0].qualifier.clear();  // "LeftShoulder": the scapula
   const Vec3 shoulder = chest_position + Vec3(hip_width * 0.9, -0.08 * leg, -0.05 * leg);
   body.paired_limb(LimbKind::Leg, 0, add_leg(body, chest, shoulder, front, LegFit::Scale));
@@ -722,11 +759,15 @@ void build_bird(Body& body, Random& rng, RestPose pose) {
   const double hip_width = leg * rng.uniform(0.08, 0.12);
   const double hip_drop = 0.05 * leg;
 
+  // Crouched: knee forward, ankle back, the foot under the root (the hips
+  // are slightly ahead of it; the bones are not scaled, see add_leg).
   LegShape legs;
   legs.joints = leg_specs({Part::UpperLeg, Part::LowerLeg, Part::Foot, Part::Toe}, "", 0);
   legs.bones = {
       {0.28 * leg, crouched ? 55.0 : 0.0}, {0.42 * leg, crouched ? -45.0 : 0.0}, {0.30 * leg, crouched ? 30.0 : 5.0}};
   legs.end_length = 0.18 * leg;
+  const double hip_ahead = 0.05 * body_length;
+  if (crouched) turn_leg_to_reach(legs.bones, -hip_ahead);
   const double root_height = hip_drop + leg_drop(legs.bones);
   const Vec3 root_position(0.0, root_height, 0.0);
   body.add(spec(Part::Hips), -1, root_position);
@@ -783,7 +824,7 @@ void build_bird(Body& body, Random& rng, RestPose pose) {
 
   body.paired_limb(
       LimbKind::Leg, 0,
-      add_leg(body, 0, root_position + Vec3(hip_width, -hip_drop, 0.05 * body_length), legs, LegFit::Scale));
+      add_leg(body, 0, root_position + Vec3(hip_width, -hip_drop, hip_ahead), legs, LegFit::Scale));
   body.paired_limb(LimbKind::Wing, 0, wings);
 }
 
