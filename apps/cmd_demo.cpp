@@ -92,12 +92,7 @@ int run_demo(int argc, char** argv) {
   } else {
     fmt::print("note: {} is missing (apt-get install assimp-testmodels); the demo uses the zoo only\n", cmu);
   }
-  std::string extra = cli.value("--extra");
-  for (size_t begin = 0; begin < extra.size();) {
-    const size_t comma = std::min(extra.find(',', begin), extra.size());
-    if (comma > begin) inputs.push_back(extra.substr(begin, comma - begin));
-    begin = comma + 1;
-  }
+  for (const std::string& input : cli.list("--extra")) inputs.push_back(input);
   CorpusOptions corpus_options;
   corpus_options.segment.creature = "person";  // the CMU takes, the only uncaptioned input
   CorpusResult corpus;

@@ -38,13 +38,6 @@ EulerOrder parse_order_option(const std::string& text) {
   return *order;
 }
 
-UpAxis parse_up(const std::string& text) {
-  if (text == "auto") return UpAxis::Auto;
-  if (text == "y") return UpAxis::Y;
-  if (text == "z") return UpAxis::Z;
-  throw UsageError("--up must be auto, y or z, got '" + text + "'");
-}
-
 }  // namespace
 
 int run_info(int argc, char** argv) {
@@ -111,7 +104,7 @@ int run_normalize(int argc, char** argv) {
   PreprocessOptions options;
   options.target_fps = cli.number("--fps");
   if (options.target_fps < 0) throw UsageError("--fps must be >= 0");
-  options.up = parse_up(cli.value("--up"));
+  options.up = cli.up_axis("--up");
   const std::string path = cli.positional_value("IN.bvh");
   const PreparedClip prepared = preprocess(read_bvh(path), path, options);
   for (const std::string& change : prepared.report.changes) fmt::print("{}: {}\n", path, change);

@@ -8,20 +8,9 @@
 
 #include <map>
 #include <set>
-#include <sstream>
 
 namespace nec::app {
 namespace {
-
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
 
 double fraction_option(const CommandLine& cli, const std::string& name) {
   const double value = cli.number(name);
@@ -58,22 +47,13 @@ int run_prepare(int argc, char** argv) {
   CorpusOptions corpus;
   corpus.preprocess.target_fps = cli.number("--fps");
   if (corpus.preprocess.target_fps <= 0) throw UsageError("--fps must be > 0");
-  const std::string up = cli.value("--up");
-  if (up == "auto") {
-    corpus.preprocess.up = UpAxis::Auto;
-  } else if (up == "y") {
-    corpus.preprocess.up = UpAxis::Y;
-  } else if (up == "z") {
-    corpus.preprocess.up = UpAxis::Z;
-  } else {
-    throw UsageError("--up must be auto, y or z");
-  }
+  corpus.preprocess.up = cli.up_axis("--up");
   corpus.kinematic_captions = !cli.is_set("--no-kinematic-captions");
   corpus.threads = cli.integer("--threads");
-  for (const std::string& csv : split_list(cli.value("--captions"))) corpus.captions.tables.push_back(CaptionTable::read(csv));
+  for (const std::string& csv : cli.list("--captions")) corpus.captions.tables.push_back(CaptionTable::read(csv));
   std::string default_creature = "creature";
   std::map<std::string, std::string> creature_of;
-  for (const std::string& item : split_list(cli.value("--creature"))) {
+  for (const std::string& item : cli.list("--creature")) {
     const size_t eq = item.find('=');
     if (eq == std::string::npos) {
       default_creature = item;
@@ -86,8 +66,8 @@ int run_prepare(int argc, char** argv) {
   cache_options.split.val_fraction = fraction_option(cli, "--val");
   cache_options.split.test_fraction = fraction_option(cli, "--test");
   cache_options.split.seed = static_cast<uint64_t>(cli.integer("--seed"));
-  cache_options.split.held_out_skeletons = split_list(cli.value("--hold-out"));
-  cache_options.split.held_out_datasets = split_list(cli.value("--hold-out-dataset"));
+  cache_options.split.held_out_skeletons = cli.list("--hold-out");
+  cache_options.split.held_out_datasets = cli.list("--hold-out-dataset");
   try {
     cache_options.split.validate();
   } catch (const std::invalid_argument& e) {

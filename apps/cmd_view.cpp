@@ -24,13 +24,6 @@ bool ends_with(const std::string& text, const std::string& suffix) {
   return true;
 }
 
-UpAxis parse_up_axis(const std::string& text) {
-  if (text == "auto") return UpAxis::Auto;
-  if (text == "y") return UpAxis::Y;
-  if (text == "z") return UpAxis::Z;
-  throw UsageError("--up must be auto, y or z, got '" + text + "'");
-}
-
 // --caption may be repeated (the i-th belongs to the i-th clip), which
 // CommandLine does not keep; take them out of the arguments first.
 std::vector<std::string> take_captions(int argc, char** argv, std::vector<char*>& rest) {
@@ -85,7 +78,7 @@ int run_view(int argc, char** argv) {
   const std::string out = cli.value("-o");
   const int frames = cli.integer("--frames");
   if (frames < 0) throw UsageError("--frames must be >= 0");
-  const UpAxis up = parse_up_axis(cli.value("--up"));
+  const UpAxis up = cli.up_axis("--up");
 
   if (frames > 0) {
     if (ends_with(out, ".html") || ends_with(out, ".htm")) throw UsageError("--frames writes a PNG; name the output .png");

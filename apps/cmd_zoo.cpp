@@ -7,18 +7,14 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <sstream>
 
 namespace nec::app {
 namespace {
 
-std::vector<zoo::BodyPlan> parse_plan_list(const std::string& text, const std::string& option) {
+std::vector<zoo::BodyPlan> parse_plan_list(const CommandLine& cli, const std::string& option) {
   std::vector<zoo::BodyPlan> plans;
-  if (text.empty() || text == "all") return plans;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    if (item.empty()) continue;
+  if (cli.value(option) == "all") return plans;
+  for (const std::string& item : cli.list(option)) {
     zoo::BodyPlan plan;
     if (!zoo::parse_body_plan(item, plan)) {
       std::string known;
@@ -66,8 +62,8 @@ int run_zoo(int argc, char** argv) {
   options.creatures = cli.integer("--creatures");
   options.clips_per_creature = cli.integer("--clips-per-creature");
   options.seed = parse_seed(cli.value("--seed"));
-  options.plans = parse_plan_list(cli.value("--plans"), "--plans");
-  options.held_out_plans = parse_plan_list(cli.value("--hold-out"), "--hold-out");
+  options.plans = parse_plan_list(cli, "--plans");
+  options.held_out_plans = parse_plan_list(cli, "--hold-out");
   options.seconds = cli.number("--seconds");
   options.fps = cli.number("--fps");
   try {

@@ -1,6 +1,7 @@
 // Command-line parsing for the nec subcommands.
 #include "command_line.h"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -150,6 +151,25 @@ bool CommandLine::is_set(const std::string& flag_name) const {
   const auto it = flags_.find(flag_name);
   if (it == flags_.end()) throw std::logic_error("CommandLine: undeclared flag " + flag_name);
   return it->second;
+}
+
+std::vector<std::string> CommandLine::list(const std::string& name) const {
+  std::vector<std::string> items;
+  const std::string& text = value(name);
+  for (size_t begin = 0; begin <= text.size();) {
+    const size_t comma = std::min(text.find(',', begin), text.size());
+    if (comma > begin) items.push_back(text.substr(begin, comma - begin));
+    begin = comma + 1;
+  }
+  return items;
+}
+
+UpAxis CommandLine::up_axis(const std::string& name) const {
+  const std::string& text = value(name);
+  if (text == "auto") return UpAxis::Auto;
+  if (text == "y") return UpAxis::Y;
+  if (text == "z") return UpAxis::Z;
+  throw UsageError(name + " must be auto, y or z, got '" + text + "'");
 }
 
 const std::vector<std::string>& CommandLine::positionals(const std::string& name) const {

@@ -10,6 +10,8 @@
 // Usage problems throw UsageError; main turns them into exit code 2.
 #pragma once
 
+#include "nec/motion/preprocess.h"
+
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -42,6 +44,10 @@ class CommandLine {
   int integer(const std::string& name) const;
   double number(const std::string& name) const;
   bool is_set(const std::string& flag_name) const;
+  // A comma-separated option value, without empty items.
+  std::vector<std::string> list(const std::string& name) const;
+  // An up-axis option: auto, y or z.
+  UpAxis up_axis(const std::string& name) const;
   const std::vector<std::string>& positionals(const std::string& name) const;
   const std::string& positional_value(const std::string& name) const;
 
