@@ -1,5 +1,6 @@
 // The `nec` binary: exit codes, error messages and outputs of the subcommands.
 #include "nec/motion/bvh.h"
+#include "nec/motion/files.h"
 #include "nec/motion/kinematics.h"
 #include "test_support.h"
 
@@ -108,6 +109,18 @@ TEST_F(Cli, NormalizeAndAugmentWriteReadableFiles) {
     ASSERT_EQ(augmented.exit_code, 0) << kind << ": " << augmented.output;
     EXPECT_EQ(read_bvh(out).motion.frame_count, n.motion.frame_count);
   }
+}
+
+TEST_F(Cli, ViewWritesAStripAndRejectsBadArguments) {
+  const std::string strip = path("strip.png");
+  const CommandResult run = run_nec("view --frames 3 --height 120 " + kCmu + " -o " + strip);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const std::string png = read_file(strip);
+  ASSERT_GT(png.size(), 8u);
+  EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  EXPECT_EQ(run_nec("view --frames 3 " + kCmu + " -o " + path("strip.html")).exit_code, 2);  // a strip must be .png
+  EXPECT_EQ(run_nec("view --frames 3 " + path("missing.bvh") + " -o " + path("x.png")).exit_code, 1);
+  EXPECT_FALSE(fs::exists(path("x.png")));
 }
 
 TEST_F(Cli, DemoWritesCacheBvhStripsAndPages) {
