@@ -1,0 +1,29 @@
+// Dataset batches (motion/batch.h, plain arrays) as torch tensors.
+//
+//   BatchLoader loader(cache, Split::Train, options);
+//   BatchTensors x = to_tensors(loader.next()).to(torch::kCUDA);
+//   // x.features (B, T, J, 9), x.joint_mask (B, J), ...
+//
+// The tensors own their memory (copied from the batch), so the batch may go.
+#pragma once
+
+#include "nec/motion/batch.h"
+
+#include <ATen/core/Tensor.h>
+#include <c10/core/Device.h>
+
+namespace nec::tat {
+
+struct BatchTensors {
+  at::Tensor features;    // (B, T, J, 9) float32, zero where masked
+  at::Tensor joint_mask;  // (B, J) bool, true for real joints
+  at::Tensor frame_mask;  // (B, T) bool, true for real frames
+  at::Tensor parents;     // (B, J) int64, -1 for the root and padding
+  at::Tensor offsets;     // (B, J, 3) float32 rest offsets, zero for padding
+
+  BatchTensors to(const c10::Device& device) const;
+};
+
+BatchTensors to_tensors(const Batch& batch);
+
+}  // namespace nec::tat
