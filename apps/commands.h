@@ -12,5 +12,6 @@ int run_prepare(int argc, char** argv);
 int run_view(int argc, char** argv);
 int run_zoo(int argc, char** argv);
 int run_demo(int argc, char** argv);
+int run_text(int argc, char** argv);
 
 }  // namespace nec::app

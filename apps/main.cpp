@@ -25,6 +25,7 @@ constexpr Subcommand kSubcommands[] = {
     {"augment", nec::app::run_augment, "write a rig-augmented copy (rest pose, bone lengths, joints)"},
     {"prepare", nec::app::run_prepare, "turn folders of BVH (+ captions) into a dataset cache"},
     {"zoo", nec::app::run_zoo, "write procedural creatures with captioned clips (BVH + caption sidecars)"},
+    {"text", nec::app::run_text, "word vectors: import GloVe once, joint-name similarity, nearest words"},
     {"view", nec::app::run_view, "show BVH clips in a self-contained HTML player, or a PNG strip of frames"},
 };
 
