@@ -1,0 +1,83 @@
+// Self-supervised pretraining of the OwO graph encoder (NECromancer appendix
+// C.3): geometric, topological and semantic tasks on rest-pose skeletons.
+//
+//   OwoPretrainer model(encoder_config, PretrainConfig{});
+//   torch::optim::AdamW optimizer(model->parameters(), torch::optim::AdamWOptions(1e-3));
+//   PretrainLosses l = model->pretrain_step(collate(graphs, encoder_config.name_dim), optimizer);
+//   // l.total, *l.offset, *l.lca, l.lca_accuracy, ...; afterwards keep model->encoder
+//
+// Tasks (each switched by a flag; a term that did not run is std::nullopt):
+// - offset:      predict each joint's rest offset from h_j (normalized units).
+// - pair_offset: predict p_k - p_j from [h_j || h_k] (eq. 13-14, the paper's
+//                "distance regression"), on sampled pairs.
+// - lca:         pointer over joints: q = FFN(h_j1 + h_j2), softmax_j q.k_j / sqrt(D),
+//                cross-entropy against LCA(j1, j2) (eq. 15-18), on sampled pairs.
+//                By appendix C.4, right answers for all pairs determine the tree.
+// - name:        InfoNCE between FFN(h_j) and FFN(name_j) over the batch's named
+//                joints (eq. 19-21); skipped without name embeddings.
+#pragma once
+
+#include "nec/owo/encoder.h"
+
+#include <optional>
+
+namespace torch::optim {
+class Optimizer;
+}
+
+namespace nec::owo {
+
+// Runtime training settings (not saved with the encoder).
+struct PretrainConfig {
+  bool offset_loss = true;          // per-joint rest offset regression
+  bool pair_offset_loss = true;     // pairwise relative position regression (eq. 13-14)
+  bool lca_loss = true;             // LCA pointer prediction (eq. 15-18)
+  bool name_loss = true;            // joint-name InfoNCE (eq. 19-21); needs name_dim > 0
+  double offset_weight = 1.0;       // lambda of the offset term
+  double pair_offset_weight = 1.0;  // lambda_geo
+  double lca_weight = 1.0;          // lambda_lca
+  double name_weight = 0.1;         // lambda_sem
+  int64_t pairs_per_skeleton = 64;  // joint pairs sampled per skeleton and step, e.g. 64
+  double temperature = 0.1;         // InfoNCE temperature tau, e.g. 0.1
+
+  // Throws std::invalid_argument naming the first bad field.
+  void validate() const;
+};
+
+struct PretrainLosses {
+  double total = 0.0;                 // weighted sum of the terms that ran
+  std::optional<double> offset;       // mean squared error of offsets (per joint, summed over xyz)
+  std::optional<double> pair_offset;  // same for p_k - p_j of sampled pairs
+  std::optional<double> lca;          // mean cross-entropy over sampled pairs
+  std::optional<double> name;         // InfoNCE over named joints
+  std::optional<double> lca_accuracy; // fraction of sampled pairs whose argmax is the LCA
+};
+
+// The encoder with its pretraining heads. Pairs are sampled with torch's
+// global generator (torch::manual_seed makes a run repeatable).
+class OwoPretrainerImpl : public torch::nn::Module {
+ public:
+  OwoPretrainerImpl(const OwoConfig& encoder_config, const PretrainConfig& config);
+
+  // One optimizer step on `batch`; returns the terms before the step.
+  PretrainLosses pretrain_step(const GraphBatch& batch, torch::optim::Optimizer& optimizer);
+  // The terms on `batch` without gradients (training mode untouched).
+  PretrainLosses evaluate(const GraphBatch& batch);
+
+  OwoEncoder encoder{nullptr};
+
+ private:
+  struct Terms;
+  Terms compute(const GraphBatch& batch);
+
+  PretrainConfig config_;
+  torch::nn::Sequential offset_head_{nullptr};       // D -> D -> 3
+  torch::nn::Sequential pair_offset_head_{nullptr};  // 2D -> D -> 3 (FFN_geo then W_geo)
+  torch::nn::Sequential lca_query_{nullptr};         // D -> D -> D
+  torch::nn::Sequential lca_key_{nullptr};           // D -> D -> D
+  torch::nn::Sequential name_node_{nullptr};         // D -> D -> D
+  torch::nn::Sequential name_text_{nullptr};         // E -> D -> D
+};
+TORCH_MODULE(OwoPretrainer);
+
+}  // namespace nec::owo
