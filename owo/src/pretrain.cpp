@@ -150,4 +150,16 @@ PretrainLosses OwoPretrainerImpl::evaluate(const GraphBatch& batch) {
   return to_losses(terms.total, terms.offset, terms.pair_offset, terms.lca, terms.name, terms.lca_accuracy);
 }
 
+at::Tensor OwoPretrainerImpl::all_pair_lca_logits(const GraphBatch& batch) {
+  if (!lca_query_) throw std::logic_error("OwoPretrainer::all_pair_lca_logits: the LCA task is switched off");
+  torch::NoGradGuard no_grad;
+  const at::Tensor h = encoder->forward(batch).joints;  // (B, J, D)
+  const int64_t b = h.size(0), j = h.size(1), d = h.size(2);
+  const at::Tensor query = lca_query_->forward(h.unsqueeze(2) + h.unsqueeze(1)).reshape({b, j * j, d});  // (B, J*J, D)
+  const at::Tensor keys = lca_key_->forward(h);                                                        // (B, J, D)
+  at::Tensor logits = torch::bmm(query, keys.transpose(1, 2)) / std::sqrt(static_cast<double>(d));    // (B, J*J, J)
+  logits = logits.masked_fill(batch.joint_mask.logical_not().unsqueeze(1), -std::numeric_limits<float>::infinity());
+  return logits.reshape({b, j, j, j});
+}
+
 }  // namespace nec::owo

@@ -63,6 +63,12 @@ class OwoPretrainerImpl : public torch::nn::Module {
   PretrainLosses pretrain_step(const GraphBatch& batch, torch::optim::Optimizer& optimizer);
   // The terms on `batch` without gradients (training mode untouched).
   PretrainLosses evaluate(const GraphBatch& batch);
+  // LCA pointer logits for every pair (j1, j2) of every skeleton, without
+  // gradients: (B, J, J, J), logits[b, j1, j2, k] scores k as LCA(j1, j2);
+  // -inf where k is padding. Throws std::logic_error without the LCA task.
+  at::Tensor all_pair_lca_logits(const GraphBatch& batch);
+
+  const PretrainConfig& config() const { return config_; }
 
   OwoEncoder encoder{nullptr};
 
