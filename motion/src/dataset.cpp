@@ -6,10 +6,7 @@
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 
-#include <fcntl.h>
 #include <nlohmann/json.hpp>
-#include <sys/mman.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -429,18 +426,18 @@ FeatureArray FeatureArray::map_file(const std::string& path, size_t floats) {
     swap_float_bytes(values.data(), floats);
     return FeatureArray(std::move(values));
   }
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno) + kHint);
-  int flags = MAP_PRIVATE;
-#ifdef MAP_POPULATE
-  flags |= MAP_POPULATE;  // fault the pages in now: much faster than one by one on first use
-#endif
-  void* mapping = ::mmap(nullptr, bytes, PROT_READ, flags, fd, 0);
-  const int map_error = errno;
-  ::close(fd);
-  if (mapping == MAP_FAILED) throw InputError(path, 0, std::string("cannot map: ") + std::strerror(map_error) + kHint);
-  out.owner_ = std::shared_ptr<const void>(mapping, [bytes](const void* p) { ::munmap(const_cast<void*>(p), bytes); });
-  out.data_ = static_cast<const float*>(mapping);
+  MappedFile file;
+  try {
+    file = MappedFile::open(path, /*populate=*/true);
+  } catch (const InputError& e) {
+    throw InputError(e.what() + std::string(kHint));
+  }
+  if (file.size() < bytes) {
+    throw InputError(path, 0, std::to_string(file.size()) + " bytes, expected " + std::to_string(bytes) + kHint);
+  }
+  const float* mapping = reinterpret_cast<const float*>(file.data());
+  out.owner_ = std::make_shared<MappedFile>(std::move(file));
+  out.data_ = mapping;
   out.size_ = floats;
   return out;
 }

@@ -3,6 +3,11 @@
 
 #include "nec/motion/error.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -55,6 +60,34 @@ void write_file_atomic(const std::string& path, std::string_view contents) {
     std::filesystem::remove(temp, ignored);
     throw std::runtime_error(path + ": cannot move the written file into place: " + ec.message());
   }
+}
+
+MappedFile MappedFile::open(const std::string& path, bool populate) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  struct stat info {};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    ::close(fd);
+    throw InputError(path, 0, "not a regular file");
+  }
+  MappedFile out;
+  out.size_ = static_cast<size_t>(info.st_size);
+  if (out.size_ == 0) {
+    ::close(fd);
+    return out;
+  }
+  int flags = MAP_PRIVATE;
+#ifdef MAP_POPULATE
+  if (populate) flags |= MAP_POPULATE;
+#endif
+  void* mapping = ::mmap(nullptr, out.size_, PROT_READ, flags, fd, 0);
+  const int map_error = errno;
+  ::close(fd);
+  if (mapping == MAP_FAILED) throw InputError(path, 0, std::string("cannot map: ") + std::strerror(map_error));
+  const size_t bytes = out.size_;
+  out.owner_ = std::shared_ptr<const void>(mapping, [bytes](const void* p) { ::munmap(const_cast<void*>(p), bytes); });
+  out.data_ = static_cast<const unsigned char*>(mapping);
+  return out;
 }
 
 }  // namespace nec

@@ -5,10 +5,6 @@
 #include "nec/motion/error.h"
 #include "nec/motion/names.h"
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -21,6 +17,8 @@
 #include <queue>
 #include <stdexcept>
 #include <utility>
+
+#include <unistd.h>
 
 #ifndef NEC_REPOSITORY_DIR
 #define NEC_REPOSITORY_DIR "."
@@ -137,27 +135,18 @@ float cosine_similarity(const Vector& a, const Vector& b) {
 
 WordVectors WordVectors::load(const std::string& path) {
   if (!host_is_little_endian()) fail(path, "word-vector files are little-endian and this machine is not");
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) fail(path, std::string("cannot open word vectors (") + std::strerror(errno) + ")");
-  struct stat info {};
-  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
-    ::close(fd);
-    fail(path, "not a regular file");
-  }
-  const size_t file_bytes = static_cast<size_t>(info.st_size);
-  if (file_bytes < kWordVectorHeaderBytes) {
-    ::close(fd);
-    fail(path, "truncated: " + std::to_string(file_bytes) + " bytes, shorter than the 64-byte header");
-  }
-  void* mapping = ::mmap(nullptr, file_bytes, PROT_READ, MAP_PRIVATE, fd, 0);
-  ::close(fd);
-  if (mapping == MAP_FAILED) fail(path, std::string("cannot map word vectors (") + std::strerror(errno) + ")");
-
   WordVectors result;
   result.path_ = path;
-  result.mapping_ = mapping;
-  result.mapping_bytes_ = file_bytes;
-  const auto* bytes = static_cast<const unsigned char*>(mapping);
+  try {
+    result.file_ = MappedFile::open(path);
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) + "; " + kWordVectorHint);
+  }
+  const size_t file_bytes = result.file_.size();
+  if (file_bytes < kWordVectorHeaderBytes) {
+    fail(path, "truncated: " + std::to_string(file_bytes) + " bytes, shorter than the 64-byte header");
+  }
+  const unsigned char* bytes = result.file_.data();
 
   if (std::memcmp(bytes, kWordVectorMagic, sizeof kWordVectorMagic) != 0)
     fail(path, "not a nec word-vector file (bad magic)");
@@ -198,30 +187,6 @@ WordVectors WordVectors::load(const std::string& path) {
       fail(path, "words are not strictly sorted at word " + std::to_string(i));
   }
   return result;
-}
-
-WordVectors::WordVectors(WordVectors&& other) noexcept { *this = std::move(other); }
-
-WordVectors& WordVectors::operator=(WordVectors&& other) noexcept {
-  if (this == &other) return *this;
-  release();
-  path_ = std::move(other.path_);
-  mapping_ = std::exchange(other.mapping_, nullptr);
-  mapping_bytes_ = std::exchange(other.mapping_bytes_, 0);
-  dim_ = std::exchange(other.dim_, 0);
-  word_count_ = std::exchange(other.word_count_, 0);
-  offsets_ = std::exchange(other.offsets_, nullptr);
-  word_bytes_ = std::exchange(other.word_bytes_, nullptr);
-  vectors_ = std::exchange(other.vectors_, nullptr);
-  return *this;
-}
-
-WordVectors::~WordVectors() { release(); }
-
-void WordVectors::release() {
-  if (mapping_ != nullptr) ::munmap(mapping_, mapping_bytes_);
-  mapping_ = nullptr;
-  mapping_bytes_ = 0;
 }
 
 std::string_view WordVectors::word(size_t index) const {

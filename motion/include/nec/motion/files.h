@@ -2,6 +2,7 @@
 // write never leaves a half-written output behind).
 #pragma once
 
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -12,5 +13,23 @@ std::string read_file(const std::string& path, size_t max_bytes = size_t{1} << 3
 // Writes `contents` to `path` through a temporary file in the same directory.
 // Throws std::runtime_error naming the file on failure.
 void write_file_atomic(const std::string& path, std::string_view contents);
+
+// A whole file mapped read-only into memory. Copies share the mapping; the
+// last one unmaps it. An empty file gives an empty mapping.
+class MappedFile {
+ public:
+  MappedFile() = default;
+  // `populate` faults every page in now (faster than one by one on first use).
+  // Throws InputError naming the file when it cannot be opened or mapped.
+  static MappedFile open(const std::string& path, bool populate = false);
+
+  const unsigned char* data() const { return data_; }
+  size_t size() const { return size_; }
+
+ private:
+  std::shared_ptr<const void> owner_;
+  const unsigned char* data_ = nullptr;
+  size_t size_ = 0;
+};
 
 }  // namespace nec

@@ -23,6 +23,8 @@
 // The file size is exactly V + 4 * N * dim; anything else is "truncated".
 #pragma once
 
+#include "nec/motion/files.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -71,11 +73,11 @@ class WordVectors {
   // naming the file and ending with kWordVectorHint.
   static WordVectors load(const std::string& path);
 
-  WordVectors(WordVectors&& other) noexcept;
-  WordVectors& operator=(WordVectors&& other) noexcept;
+  WordVectors(WordVectors&& other) noexcept = default;
+  WordVectors& operator=(WordVectors&& other) noexcept = default;
   WordVectors(const WordVectors&) = delete;
   WordVectors& operator=(const WordVectors&) = delete;
-  ~WordVectors();
+  ~WordVectors() = default;
 
   int dim() const { return dim_; }
   size_t size() const { return word_count_; }
@@ -101,11 +103,9 @@ class WordVectors {
 
  private:
   WordVectors() = default;
-  void release();
 
   std::string path_;
-  void* mapping_ = nullptr;  // the whole file, read-only
-  size_t mapping_bytes_ = 0;
+  MappedFile file_;  // the whole file, read-only
   int dim_ = 0;
   size_t word_count_ = 0;
   const uint32_t* offsets_ = nullptr;  // (N + 1)
