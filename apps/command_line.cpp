@@ -127,6 +127,8 @@ const std::string& CommandLine::value(const std::string& name) const {
   return it->second;
 }
 
+bool CommandLine::declared(const std::string& name) const { return find(name) != nullptr; }
+
 int CommandLine::integer(const std::string& name) const {
   const std::string& text = value(name);
   int out = 0;

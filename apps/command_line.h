@@ -41,6 +41,7 @@ class CommandLine {
   std::string usage() const;
 
   const std::string& value(const std::string& name) const;
+  bool declared(const std::string& name) const;  // an option or flag of this name exists
   int integer(const std::string& name) const;
   double number(const std::string& name) const;
   bool is_set(const std::string& flag_name) const;

@@ -13,5 +13,14 @@ int run_view(int argc, char** argv);
 int run_zoo(int argc, char** argv);
 int run_demo(int argc, char** argv);
 int run_text(int argc, char** argv);
+int run_train(int argc, char** argv);      // nec train MODEL ...: dispatches to run_train_<model>
+int run_train_owo(int argc, char** argv);  // nec train owo
+int run_eval(int argc, char** argv);       // nec eval MODEL ...: dispatches to run_eval_<model>
+int run_eval_owo(int argc, char** argv);   // nec eval owo
+int run_encode(int argc, char** argv);
+int run_decode(int argc, char** argv);
+int run_transfer(int argc, char** argv);
+int run_train_tat(int argc, char** argv);
+int run_eval_recon(int argc, char** argv);
 
 }  // namespace nec::app

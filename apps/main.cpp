@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <malloc.h>
+
 #include <cstring>
 #include <string>
 
@@ -27,6 +29,11 @@ constexpr Subcommand kSubcommands[] = {
     {"zoo", nec::app::run_zoo, "write procedural creatures with captioned clips (BVH + caption sidecars)"},
     {"text", nec::app::run_text, "word vectors: import GloVe once, joint-name similarity, nearest words"},
     {"view", nec::app::run_view, "show BVH clips in a self-contained HTML player, or a PNG strip of frames"},
+    {"train", nec::app::run_train, "train a model: owo (skeleton encoder) or tat (tokenizer)"},
+    {"eval", nec::app::run_eval, "evaluate a trained model: owo (skeleton encoder on unseen skeletons)"},
+    {"encode", nec::app::run_encode, "turn a BVH clip into motion tokens with a trained tokenizer"},
+    {"decode", nec::app::run_decode, "decode motion tokens onto any skeleton, as BVH"},
+    {"transfer", nec::app::run_transfer, "move a clip onto another skeleton (encode + decode)"},
 };
 
 void print_overview() {
@@ -39,6 +46,10 @@ void print_overview() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Model tensors of tens of MB are allocated and freed every step; glibc would
+  // map and unmap each one (page faults on every touch). Keep them in the heap.
+  mallopt(M_MMAP_THRESHOLD, 1 << 30);
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
     print_overview();
     return argc < 2 ? 2 : 0;

@@ -198,6 +198,37 @@ TEST(Batch, EpochVisitsEveryClipOnce) {
   EXPECT_EQ(in_order.epoch_order(3), cache.clips_in(Split::Train));
 }
 
+TEST(Batch, JointBucketsGroupSimilarSkeletonsAndKeepTheEpoch) {
+  const DatasetCache cache = synthetic_cache(64);  // rigs of 5, 9, 13 and 17 joints in turn
+  BatchOptions options;
+  options.batch_size = 4;
+  options.crop_frames = 16;
+  // Padding: summed over an epoch, joints padded = Σ_b (B * Jmax_b - Σ J).
+  auto padding = [&](const BatchLoader& loader) {
+    int padded = 0;
+    for (int i = 0; i < loader.batches_per_epoch(); ++i) {
+      const Batch b = loader.batch(0, i);
+      for (int count : b.joint_counts) padded += b.max_joints - count;
+    }
+    return padded;
+  };
+  const BatchLoader plain(cache, Split::Train, options);
+  options.joint_buckets = 16;  // the whole epoch sorted: every batch holds one rig
+  const BatchLoader bucketed(cache, Split::Train, options);
+  EXPECT_GT(padding(plain), 100);
+  EXPECT_EQ(padding(bucketed), 0);
+  // Still every clip once, and the batches come in a shuffled order.
+  std::vector<int> order = bucketed.epoch_order(0);
+  std::sort(order.begin(), order.end());
+  EXPECT_EQ(order, cache.clips_in(Split::Train));
+  std::vector<int> first_joints;
+  for (int i = 0; i < bucketed.batches_per_epoch(); ++i) first_joints.push_back(bucketed.batch(0, i).joint_counts[0]);
+  EXPECT_FALSE(std::is_sorted(first_joints.begin(), first_joints.end()));
+  EXPECT_NE(bucketed.epoch_order(0), bucketed.epoch_order(1));
+  options.joint_buckets = -1;
+  EXPECT_THROW(options.validate(), std::invalid_argument);
+}
+
 TEST(Batch, SameSeedSameBatches) {
   const DatasetCache cache = synthetic_cache(20);
   BatchOptions options;

@@ -23,6 +23,7 @@ uint64_t mix64(uint64_t x) {
 }
 
 constexpr uint64_t kOrderStream = ~uint64_t{0};  // stream of the epoch order; items use their position
+constexpr uint64_t kBucketStream = ~uint64_t{1};  // stream of the batch order when bucketing by joint count
 
 uint64_t stream_seed(uint64_t seed, int epoch, uint64_t stream) {
   return mix64(mix64(mix64(seed) ^ static_cast<uint64_t>(epoch)) ^ stream);
@@ -72,6 +73,7 @@ std::vector<std::string> augmented_canonical_names(const Skeleton& original, con
 void BatchOptions::validate() const {
   if (batch_size < 1) throw std::invalid_argument("BatchOptions: batch_size must be at least 1, is " + std::to_string(batch_size));
   if (crop_frames < 0) throw std::invalid_argument("BatchOptions: crop_frames must be >= 0, is " + std::to_string(crop_frames));
+  if (joint_buckets < 0) throw std::invalid_argument("BatchOptions: joint_buckets must be >= 0, is " + std::to_string(joint_buckets));
   if (!(augment_probability >= 0.0 && augment_probability <= 1.0)) {
     throw std::invalid_argument("BatchOptions: augment_probability must be in [0, 1], is " + std::to_string(augment_probability));
   }
@@ -143,7 +145,25 @@ std::vector<int> BatchLoader::epoch_order(int epoch) const {
   if (!options_.shuffle) return order;
   Random random(stream_seed(options_.seed, epoch, kOrderStream));
   for (size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[random.below(i)]);
-  return order;
+  if (options_.joint_buckets == 0) return order;
+
+  // Sort runs of joint_buckets batches by joint count, then shuffle whole batches.
+  const size_t batch = static_cast<size_t>(options_.batch_size);
+  const size_t run = batch * static_cast<size_t>(options_.joint_buckets);
+  const auto by_joints = [&](int a, int b) { return cache_.clips[a].joint_count < cache_.clips[b].joint_count; };
+  for (size_t start = 0; start < order.size(); start += run) {
+    std::stable_sort(order.begin() + start, order.begin() + std::min(order.size(), start + run), by_joints);
+  }
+  const size_t full = order.size() / batch;  // a smaller last batch stays last
+  std::vector<size_t> batches(full);
+  for (size_t i = 0; i < full; ++i) batches[i] = i;
+  Random batch_random(stream_seed(options_.seed, epoch, kBucketStream));
+  for (size_t i = full; i > 1; --i) std::swap(batches[i - 1], batches[batch_random.below(i)]);
+  std::vector<int> shuffled;
+  shuffled.reserve(order.size());
+  for (size_t b : batches) shuffled.insert(shuffled.end(), order.begin() + b * batch, order.begin() + (b + 1) * batch);
+  shuffled.insert(shuffled.end(), order.begin() + full * batch, order.end());
+  return shuffled;
 }
 
 Batch BatchLoader::batch(int epoch, int index) const {

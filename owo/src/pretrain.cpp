@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace nec::owo {
 namespace {
@@ -144,6 +145,33 @@ PretrainLosses OwoPretrainerImpl::pretrain_step(const GraphBatch& batch, torch::
   return to_losses(terms.total, terms.offset, terms.pair_offset, terms.lca, terms.name, terms.lca_accuracy);
 }
 
+PretrainLosses OwoPretrainerImpl::pretrain_step(const GraphBatch& batch, torch::optim::Optimizer& optimizer,
+                                                double max_grad_norm) {
+  optimizer.zero_grad();
+  const Terms terms = compute(batch);
+  terms.total.backward();
+  std::vector<at::Tensor> gradients;
+  for (const at::Tensor& parameter : parameters()) {
+    if (parameter.grad().defined()) gradients.push_back(parameter.grad().detach().norm().reshape({1}));
+  }
+  const double grad_norm = gradients.empty() ? 0.0 : torch::cat(gradients).norm().item<double>();
+  PretrainLosses losses = to_losses(terms.total, terms.offset, terms.pair_offset, terms.lca, terms.name, terms.lca_accuracy);
+  losses.grad_norm = grad_norm;
+  if (!std::isfinite(losses.total) || !std::isfinite(grad_norm)) {
+    optimizer.zero_grad();
+    return losses;
+  }
+  if (max_grad_norm > 0.0 && grad_norm > max_grad_norm) {
+    torch::NoGradGuard no_grad;
+    const double scale = max_grad_norm / (grad_norm + 1e-6);
+    for (const at::Tensor& parameter : parameters()) {
+      if (parameter.grad().defined()) parameter.grad().mul_(scale);
+    }
+  }
+  optimizer.step();
+  return losses;
+}
+
 PretrainLosses OwoPretrainerImpl::evaluate(const GraphBatch& batch) {
   torch::NoGradGuard no_grad;
   const Terms terms = compute(batch);
@@ -160,6 +188,13 @@ at::Tensor OwoPretrainerImpl::all_pair_lca_logits(const GraphBatch& batch) {
   at::Tensor logits = torch::bmm(query, keys.transpose(1, 2)) / std::sqrt(static_cast<double>(d));    // (B, J*J, J)
   logits = logits.masked_fill(batch.joint_mask.logical_not().unsqueeze(1), -std::numeric_limits<float>::infinity());
   return logits.reshape({b, j, j, j});
+}
+
+at::Tensor OwoPretrainerImpl::predicted_offsets(const GraphBatch& batch) {
+  if (!offset_head_) throw std::logic_error("OwoPretrainer::predicted_offsets: the offset task is switched off");
+  torch::NoGradGuard no_grad;
+  const at::Tensor h = encoder->forward(batch).joints;  // (B, J, D)
+  return offset_head_->forward(h) * batch.joint_mask.unsqueeze(-1).to(h.scalar_type());
 }
 
 }  // namespace nec::owo

@@ -1,13 +1,30 @@
 // Shared helpers for the tests.
 #include "test_support.h"
 
+#include <sys/wait.h>
+
 #include <algorithm>
+#include <array>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
 namespace nec::testing {
 
 std::string cmu_bvh_dir() { return NEC_CMU_BVH_DIR; }
+
+CommandResult run_nec(const std::string& arguments) {
+  const std::string command = std::string(NEC_BINARY_DIR) + "/apps/nec " + arguments + " 2>&1";
+  CommandResult run;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return run;
+  std::array<char, 4096> buffer{};
+  size_t n = 0;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
 
 std::string shared_data_dir() {
   const std::string dir = NEC_SHARED_DATA_DIR;

@@ -42,6 +42,13 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+// The built `nec` binary run with `arguments` (a shell command line), stdout and stderr together.
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;
+};
+CommandResult run_nec(const std::string& arguments);
+
 // Largest distance between corresponding positions of two pose sets.
 double max_position_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b);
 

@@ -31,6 +31,9 @@ struct BatchOptions {
   uint64_t seed = 0;                // same seed, same batches
   bool shuffle = true;              // a new clip order every epoch; false: clip order
   bool drop_last = false;           // skip the last, smaller batch of an epoch
+  int joint_buckets = 0;            // > 0: batches of similar joint counts (less padding): each run of
+                                    // joint_buckets batches of the shuffled order is sorted by joint count,
+                                    // then the epoch's batches are shuffled; e.g. 16
   double augment_probability = 0.0; // chance that an item's rig is augmented, e.g. 0.5
   std::vector<AugmentKind> augment_kinds{AugmentKind::RestPose, AugmentKind::BoneLength, AugmentKind::JointRemoval,
                                          AugmentKind::Subdivision};  // one is drawn uniformly per augmented item

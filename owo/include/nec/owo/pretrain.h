@@ -51,6 +51,7 @@ struct PretrainLosses {
   std::optional<double> lca;          // mean cross-entropy over sampled pairs
   std::optional<double> name;         // InfoNCE over named joints
   std::optional<double> lca_accuracy; // fraction of sampled pairs whose argmax is the LCA
+  std::optional<double> grad_norm;    // global gradient norm before clipping (the clipping pretrain_step only)
 };
 
 // The encoder with its pretraining heads. Pairs are sampled with torch's
@@ -61,12 +62,19 @@ class OwoPretrainerImpl : public torch::nn::Module {
 
   // One optimizer step on `batch`; returns the terms before the step.
   PretrainLosses pretrain_step(const GraphBatch& batch, torch::optim::Optimizer& optimizer);
+  // The same with the global gradient norm clipped to `max_grad_norm` (0: no
+  // clipping; the norm is reported either way). When the total or the norm is
+  // NaN or infinite, no step is taken and the model stays as it was.
+  PretrainLosses pretrain_step(const GraphBatch& batch, torch::optim::Optimizer& optimizer, double max_grad_norm);
   // The terms on `batch` without gradients (training mode untouched).
   PretrainLosses evaluate(const GraphBatch& batch);
   // LCA pointer logits for every pair (j1, j2) of every skeleton, without
   // gradients: (B, J, J, J), logits[b, j1, j2, k] scores k as LCA(j1, j2);
   // -inf where k is padding. Throws std::logic_error without the LCA task.
   at::Tensor all_pair_lca_logits(const GraphBatch& batch);
+  // Predicted rest offsets (B, J, 3) in the graph's units (zero rows at padding),
+  // without gradients. Throws std::logic_error without the offset task.
+  at::Tensor predicted_offsets(const GraphBatch& batch);
 
   const PretrainConfig& config() const { return config_; }
 

@@ -1,0 +1,139 @@
+// nec encode | decode | transfer: motion to tokens and tokens onto any skeleton.
+#include "command_line.h"
+#include "commands.h"
+#include "model_options.h"
+
+#include "nec/motion/bvh.h"
+#include "nec/motion/error.h"
+#include "nec/tat/tokens.h"
+
+#include <fmt/format.h>
+#include <torch/torch.h>
+
+#include <chrono>
+
+namespace nec::app {
+namespace {
+
+// Tokens of one BVH file.
+tat::TokenFile encode_file(TokenizerSession& session, const std::string& path, UpAxis up) {
+  const PreparedClip source = prepare_for_model(path, session.model.info.fps, up);
+  const Features features = encode_features(source.clip.skeleton, source.clip.motion);
+  const at::Tensor codes = tat::encode_clip(*session.model.tokenizer, features,
+                                            session.embed(source.clip.skeleton, source.canonical_names),
+                                            session.windows)
+                               .to(torch::kInt32)
+                               .contiguous();
+  const tat::TatConfig& config = session.model.tokenizer->config();
+  tat::TokenFile tokens;
+  tokens.fps = session.model.info.fps;
+  tokens.frames = features.frame_count;
+  tokens.downsampling = static_cast<int>(config.downsampling());
+  tokens.layers = static_cast<int>(config.quantizer.layers);
+  tokens.codebook_size = static_cast<int>(config.quantizer.codebook_size);
+  tokens.model_kind = tat::to_string(config.kind);
+  tokens.training_step = session.model.info.training_step;
+  tokens.source_file = path;
+  tokens.source_joints = source.clip.skeleton.joint_count();
+  tokens.source_scale = source.normalization.scale;
+  tokens.heading_degrees = heading_degrees(source.normalization);
+  tokens.codes.assign(codes.data_ptr<int32_t>(), codes.data_ptr<int32_t>() + codes.numel());
+  return tokens;
+}
+
+// Decodes tokens onto the skeleton of `target_path` and writes OUT.bvh in that
+// file's units, up axis, joint names, channels and Euler orders.
+void decode_onto(TokenizerSession& session, const tat::TokenFile& tokens, const std::string& target_path, UpAxis up,
+                 const std::string& out_path) {
+  const tat::TatConfig& config = session.model.tokenizer->config();
+  if (tokens.layers > config.quantizer.layers || tokens.codebook_size != config.quantizer.codebook_size ||
+      tokens.downsampling != config.downsampling()) {
+    throw InputError(tokens.source_file, 0,
+                     fmt::format("tokens of a {}-layer x {} codebook at downsampling {} do not fit this model "
+                                 "({} x {}, downsampling {}); decode with the model that encoded them",
+                                 tokens.layers, tokens.codebook_size, tokens.downsampling, config.quantizer.layers,
+                                 config.quantizer.codebook_size, config.downsampling()));
+  }
+  const PreparedClip target = prepare_for_model(target_path, session.model.info.fps, up);
+  const Skeleton& skeleton = target.clip.skeleton;
+  const at::Tensor codes =
+      torch::from_blob(const_cast<int32_t*>(tokens.codes.data()), {tokens.steps(), tokens.layers}, torch::kInt32)
+          .to(torch::kInt64);
+  const Features features =
+      tat::decode_clip(*session.model.tokenizer, codes, tokens.frames, session.embed(skeleton, target.canonical_names),
+                       skeleton.joint_count(), tokens.fps, session.windows);
+  Clip out{skeleton, decode_features(skeleton, features), {}};
+  out = denormalize(out, with_heading(target.normalization, tokens.heading_degrees));
+  write_bvh(out_path, out.skeleton, out.motion);
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+int run_encode(int argc, char** argv) {
+  CommandLine cli("nec encode",
+                  "Turn a BVH clip into motion tokens (JSON) with a trained tokenizer. Long clips are encoded\n"
+                  "in overlapping windows of the training length.");
+  cli.positional("IN.bvh", "input BVH file");
+  cli.option("-o", "TOKENS.json", "", "output token file", true);
+  cli.option("--up", "AXIS", "auto", "up axis of the input: auto, y or z");
+  declare_model_options(cli);
+  cli.example("nec encode walk.bvh --model runs/tat -o walk.tokens.json");
+  if (!cli.parse(argc, argv)) return 0;
+  const auto start = std::chrono::steady_clock::now();
+  TokenizerSession session = open_tokenizer(tokenizer_options(cli));
+  const tat::TokenFile tokens = encode_file(session, cli.positional_value("IN.bvh"), cli.up_axis("--up"));
+  tat::write_tokens(cli.value("-o"), tokens);
+  fmt::print("wrote {}: {} frames -> {} token steps x {} layers ({:.2f} s)\n", cli.value("-o"), tokens.frames,
+             tokens.steps(), tokens.layers, seconds_since(start));
+  return 0;
+}
+
+int run_decode(int argc, char** argv) {
+  CommandLine cli("nec decode",
+                  "Decode motion tokens onto a skeleton: the output BVH has the skeleton file's joint names,\n"
+                  "channels, Euler orders, units and up axis; the motion keeps the heading it was encoded with.");
+  cli.positional("TOKENS.json", "token file from `nec encode`");
+  cli.option("--skeleton", "TARGET.bvh", "", "BVH file whose skeleton receives the motion (its motion is ignored)",
+             true);
+  cli.option("-o", "OUT.bvh", "", "output BVH file", true);
+  cli.option("--up", "AXIS", "auto", "up axis of the skeleton file: auto, y or z");
+  declare_model_options(cli);
+  cli.example("nec decode walk.tokens.json --skeleton dragon.bvh --model runs/tat -o dragon_walk.bvh");
+  if (!cli.parse(argc, argv)) return 0;
+  const auto start = std::chrono::steady_clock::now();
+  TokenizerSession session = open_tokenizer(tokenizer_options(cli));
+  const tat::TokenFile tokens = tat::read_tokens(cli.positional_value("TOKENS.json"));
+  decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"), cli.value("-o"));
+  fmt::print("wrote {}: {} frames on the skeleton of {} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
+             cli.value("--skeleton"), seconds_since(start));
+  return 0;
+}
+
+int run_transfer(int argc, char** argv) {
+  CommandLine cli("nec transfer",
+                  "Move a clip onto another skeleton (any species): encode SRC.bvh to tokens with its own skeleton,\n"
+                  "decode them with the target's. The output uses the target file's joint names, channels, Euler\n"
+                  "orders, units and up axis; speed scales with the target's size, the heading is the source's.");
+  cli.positional("SRC.bvh", "the motion to transfer");
+  cli.option("--to", "TARGET.bvh", "", "BVH file whose skeleton receives the motion", true);
+  cli.option("-o", "OUT.bvh", "", "output BVH file", true);
+  cli.option("--up", "AXIS", "auto", "up axis of both input files: auto, y or z");
+  cli.option("--tokens", "FILE", "", "also write the intermediate tokens here");
+  declare_model_options(cli);
+  cli.example("nec transfer human_wave.bvh --to dragon.bvh --model runs/tat -o dragon_wave.bvh");
+  if (!cli.parse(argc, argv)) return 0;
+  const auto start = std::chrono::steady_clock::now();
+  TokenizerSession session = open_tokenizer(tokenizer_options(cli));
+  const tat::TokenFile tokens = encode_file(session, cli.positional_value("SRC.bvh"), cli.up_axis("--up"));
+  decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"), cli.value("-o"));
+  if (!cli.value("--tokens").empty()) tat::write_tokens(cli.value("--tokens"), tokens);
+  fmt::print("wrote {}: {} frames of {} on the skeleton of {} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
+             cli.positional_value("SRC.bvh"), cli.value("--to"), seconds_since(start));
+  return 0;
+}
+
+}  // namespace nec::app

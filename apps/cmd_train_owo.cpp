@@ -1,0 +1,177 @@
+// nec train owo: pretrain the OwO skeleton encoder on the skeletons of dataset caches.
+#include "command_line.h"
+#include "commands.h"
+#include "training_loop.h"
+
+#include "nec/motion/error.h"
+#include "nec/motion/files.h"
+#include "nec/owo/training.h"
+
+#include <fmt/format.h>
+#include <torch/torch.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <optional>
+#include <thread>
+
+namespace nec::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+LossTerms step_terms(const owo::PretrainLosses& l) {
+  LossTerms terms{{"total", l.total}};
+  if (l.offset) terms.emplace_back("offset", *l.offset);
+  if (l.pair_offset) terms.emplace_back("pair", *l.pair_offset);
+  if (l.lca) terms.emplace_back("lca", *l.lca);
+  if (l.name) terms.emplace_back("name", *l.name);
+  if (l.lca_accuracy) terms.emplace_back("lca_acc", *l.lca_accuracy);
+  if (l.grad_norm) terms.emplace_back("grad", *l.grad_norm);
+  return terms;
+}
+
+// Refuses to start a run that would overwrite something, or resume nothing.
+void check_out_dir(const std::string& out, bool resume) {
+  std::error_code ec;
+  const bool exists = fs::exists(out, ec);
+  const bool checkpoint = fs::exists(fs::path(out) / "config.json", ec);
+  if (resume) {
+    if (!checkpoint) {
+      throw InputError(out, 0, "no checkpoint to resume; give the --out of an earlier run, or leave out --resume");
+    }
+    return;
+  }
+  if (checkpoint) {
+    throw InputError(out, 0, "already holds a checkpoint; pass --resume to continue it, or choose another --out");
+  }
+  if (exists && (!fs::is_directory(out, ec) || !fs::is_empty(out, ec))) {
+    throw InputError(out, 0, "exists and is not a checkpoint directory; choose another --out");
+  }
+}
+
+}  // namespace
+
+int run_train_owo(int argc, char** argv) {
+  CommandLine cli("nec train owo",
+                  "Pretrain the OwO skeleton graph encoder (NECromancer appendix C.2-C.3) on every distinct skeleton\n"
+                  "of the dataset caches, with rig augmentations drawn on the fly (rest pose from the skeleton's own\n"
+                  "clips, bone lengths, joint removal and subdivision). Skeletons the config's data.held_out patterns\n"
+                  "name (e.g. whole body plans: \"spider\", \"snake\"), and what the caches hold out, are never trained\n"
+                  "on: they validate every validate_every steps (LCA accuracy over all pairs, offset error, share of\n"
+                  "trees rebuilt exactly from the predicted LCAs). A checkpoint (model + optimizer state + step) is\n"
+                  "written every checkpoint_every steps and at the end; --resume continues it with the same config.\n"
+                  "A NaN or infinite loss stops training with exit code 1; the last checkpoint stays.");
+  cli.option("--config", "CFG.json", "", "training config (configs/owo_cpu.json, configs/owo_gpu.json)", true);
+  cli.option("--data", "CACHES", "", "dataset caches from `nec prepare`, comma-separated", true);
+  cli.option("--out", "CKPT", "", "checkpoint directory (replaced atomically at every checkpoint)", true);
+  cli.flag("--resume", "continue the run whose checkpoint is in --out (same config; steps may grow)");
+  cli.option("--steps", "N", "", "the step training ends at (default: the config's steps)");
+  cli.option("--threads", "N", "0", "torch threads; 0 = all cores");
+  cli.option("--device", "DEVICE", "cpu", "cpu, cuda or cuda:N");
+  cli.option("--glove", "FILE", text::default_word_vectors_path(), "word vectors for joint names (`nec text import-glove`)");
+  cli.flag("--no-names", "train without joint names (sets names false and encoder.name_dim 0)");
+  cli.example("nec train owo --config configs/owo_cpu.json --data cache/ --out runs/owo");
+  cli.example("nec train owo --config configs/owo_cpu.json --data cache/ --out runs/owo --resume --steps 6000");
+  if (!cli.parse(argc, argv)) return 0;
+
+  const std::string config_path = cli.value("--config");
+  const std::string out = cli.value("--out");
+  const bool resume = cli.is_set("--resume");
+  const std::vector<std::string> caches = cli.list("--data");
+  if (caches.empty()) throw UsageError("--data needs at least one cache");
+  const int threads = cli.integer("--threads");
+  if (threads < 0) throw UsageError("--threads must be >= 0");
+  c10::Device device(c10::kCPU);
+  try {
+    device = owo::training_device(cli.value("--device"));
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+
+  owo::OwoTrainingConfig config = owo::parse_owo_training_config(read_file(config_path, size_t{1} << 24), config_path);
+  if (!cli.value("--steps").empty()) {
+    const int steps = cli.integer("--steps");
+    if (steps < 1) throw UsageError("--steps must be >= 1");
+    config.steps = steps;
+  }
+  if (cli.is_set("--no-names")) {
+    config.names = false;
+    config.encoder.name_dim = 0;
+  }
+  check_out_dir(out, resume);
+  torch::set_num_threads(threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+
+  std::optional<text::WordVectors> vectors;
+  if (config.names) {
+    try {
+      vectors.emplace(text::WordVectors::load(cli.value("--glove")));
+    } catch (const InputError& e) {
+      throw InputError(std::string(e.what()) + "; or train without joint names: --no-names");
+    }
+    if (vectors->dim() != config.encoder.name_dim) {
+      throw InputError(config_path, 0,
+                       "field 'encoder.name_dim' is " + std::to_string(config.encoder.name_dim) + ", but the word vectors " +
+                           vectors->path() + " are " + std::to_string(vectors->dim()) + "-d; set it to " +
+                           std::to_string(vectors->dim()) + " (or train without names: --no-names)");
+    }
+  }
+
+  std::vector<std::string> data;
+  for (const std::string& cache : caches) data.push_back(fs::absolute(cache).lexically_normal().string());
+  owo::SkeletonSet set = owo::load_skeleton_set(data, config.hold_out(), config.data.poses_per_skeleton, config.seed);
+  if (set.train.empty()) {
+    throw InputError(config_path, 0, "field 'data.held_out' holds out every skeleton of " + cli.value("--data") +
+                                         "; nothing is left to train on");
+  }
+  owo::OwoTrainer trainer(config, std::move(set), vectors ? &*vectors : nullptr, device);
+  const int64_t start_step = resume ? trainer.resume(out) : 0;
+
+  fmt::print("data     {}\n", trainer.describe_data(data));
+  fmt::print("model    {} + pretraining heads, {} parameters; names {}\n", config.encoder.to_string(),
+             trainer.parameter_count(), config.names ? vectors->path() : std::string("off"));
+  fmt::print("run      steps {}-{}, batch {}, AdamW lr {:g} (warm-up {}, cosine to {:g}), clip {:g}; {}, {} threads\n",
+             start_step + 1, config.steps, config.batch_size, config.optimizer.lr, config.optimizer.warmup_steps,
+             config.optimizer.lr * config.optimizer.final_lr_fraction, config.optimizer.grad_clip, device.str(),
+             torch::get_num_threads());
+  if (resume) fmt::print("resumed  {} at step {}\n", out, start_step);
+  if (start_step >= config.steps) {
+    fmt::print("the checkpoint is at step {} and the run ends at step {}: nothing to do (raise --steps to go on)\n",
+               start_step, config.steps);
+    return 0;
+  }
+  std::fflush(stdout);
+
+  TrainingSchedule schedule;
+  schedule.total_steps = config.steps;
+  schedule.log_every = config.log_every;
+  schedule.validate_every = trainer.skeletons().held_out.empty() ? 0 : config.validate_every;
+  schedule.checkpoint_every = config.checkpoint_every;
+  TrainingHooks hooks;
+  hooks.step = [&](int64_t step) { return step_terms(trainer.step(step)); };
+  hooks.validate = [&](int64_t) {
+    const owo::ScoreSummary held_out = owo::summarize(trainer.score_held_out());
+    return LossTerms{{"held_out_lca_acc", held_out.lca_accuracy},
+                     {"offset_pct", held_out.offset_percent},
+                     {"rebuilt", held_out.rebuild_rate}};
+  };
+  hooks.checkpoint = [&](int64_t step) { trainer.save(out, step, data); };
+
+  const auto start = std::chrono::steady_clock::now();
+  ProgressReporter progress(stdout, isatty(fileno(stdout)) != 0);
+  const TrainingOutcome outcome = run_training(schedule, start_step, out, hooks, progress);
+  if (outcome.stopped) {
+    fmt::print(stderr, "nec: error: {}\n", outcome.message);
+    return outcome.exit_code();
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  fmt::print("trained steps {}-{} in {} ({:.3g} steps/s); checkpoint {}\nevaluate: nec eval owo --model {} --data {}\n",
+             start_step + 1, outcome.last_step, format_duration(seconds),
+             (outcome.last_step - start_step) / std::max(seconds, 1e-9), out, out, cli.value("--data"));
+  return 0;
+}
+
+}  // namespace nec::app

@@ -1,0 +1,175 @@
+// OwO pretraining runs (`nec train owo`): the JSON training config, the
+// learning-rate schedule, a trainer that draws augmented batches from a
+// SkeletonSet and takes AdamW steps, and training checkpoints that resume.
+//
+//   OwoTrainingConfig config = parse_owo_training_config(read_file("configs/owo_cpu.json"), "configs/owo_cpu.json");
+//   OwoTrainer trainer(config, split_skeleton_set(all, config.hold_out()), &vectors, torch::kCPU);
+//   for (int64_t step = trainer.resume("runs/owo") + 1; step <= config.steps; ++step) {   // or from 1
+//     PretrainLosses l = trainer.step(step);
+//     if (step % 500 == 0) trainer.save("runs/owo", step, {"runs/cache"});
+//   }
+//
+// A training checkpoint is an OwO checkpoint (checkpoint.h; what `nec eval
+// owo` and later models load) plus, in the same directory and replaced with it
+// atomically:
+//   training.json   {"format": "nec-owo-training", "version": 1, "step": 1200, "config": {...},
+//                    "data": ["runs/cache"], "train_skeletons": [hash...], "held_out_skeletons": [hash...],
+//                    "optimizer": "optimizer.pt"}
+//   optimizer.pt    the AdamW state
+// Steps draw their batch, augmentations and sampled pairs from (seed, step)
+// alone, so a resumed run takes the same steps as one that never stopped.
+#pragma once
+
+#include "nec/owo/evaluation.h"
+#include "nec/owo/pretrain.h"
+#include "nec/owo/skeleton_set.h"
+#include "nec/text/word_vectors.h"
+
+#include <c10/core/Device.h>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace torch::optim {
+class AdamW;
+}
+
+namespace nec::owo {
+
+constexpr const char* kOwoTrainingFormat = "nec-owo-training";  // training.json "format"
+constexpr int kOwoTrainingVersion = 1;                          // training.json "version"
+
+// AdamW with linear warm-up, then cosine decay to final_lr_fraction * lr at the last step.
+struct OwoOptimizerConfig {
+  double lr = 1e-3;                // peak learning rate, e.g. 1e-3 (small CPU model), 2e-4 (paper size)
+  double weight_decay = 0.01;      // AdamW decoupled weight decay, e.g. 0.01
+  int64_t warmup_steps = 100;      // linear warm-up from lr / warmup_steps, e.g. 100
+  double final_lr_fraction = 0.1;  // the learning rate at the last step, as a fraction of lr
+  double grad_clip = 1.0;          // largest global gradient norm; 0 = no clipping
+
+  void validate() const;  // throws std::invalid_argument naming the field
+};
+
+// Which skeletons train and which are held out, and how they are augmented.
+struct OwoDataConfig {
+  std::vector<std::string> held_out;  // hold-out patterns (skeleton_set.h), e.g. {"spider", "snake"}
+  bool cache_held_out = true;         // also hold out what the caches hold out (nec prepare --hold-out ...)
+  int64_t poses_per_skeleton = 16;    // frames kept per skeleton for rest-pose augmentation
+  int64_t size_buckets = 4;           // batches come from one of this many joint-count buckets (1 = any mix)
+  AugmentOptions augment;
+
+  void validate() const;
+};
+
+// The encoder a training config starts from: OwoConfig's defaults with
+// name_dim 100, the width of the project's GloVe vectors (text/).
+inline OwoConfig default_training_encoder() {
+  OwoConfig config;
+  config.name_dim = 100;
+  return config;
+}
+
+// Everything `nec train owo` reads from its --config file. Fields left out
+// of the file keep these defaults; unknown fields are an error.
+struct OwoTrainingConfig {
+  OwoConfig encoder = default_training_encoder();  // saved with the model
+  PretrainConfig pretrain;       // saved with the model
+  OwoOptimizerConfig optimizer;
+  OwoDataConfig data;
+  bool names = true;             // feed joint-name embeddings; encoder.name_dim must equal the word vectors' dim
+  int64_t batch_size = 16;       // skeletons per step at most, e.g. 16
+  int64_t batch_joint_pairs = 0; // and at most this many B * Jmax^2 (a step's edge tensors); 0 = no limit
+  int64_t steps = 2000;          // the step training ends at
+  int64_t log_every = 50;        // progress line cadence off a terminal
+  int64_t validate_every = 500;  // held-out validation every N steps and at the end; 0 = never
+  int64_t checkpoint_every = 500;  // checkpoint every N steps; always at the end
+  uint64_t seed = 1;             // model init, batches, augmentation, sampled pairs
+
+  void validate() const;  // throws std::invalid_argument naming the field, e.g. "optimizer.lr must be > 0"
+  HoldOut hold_out() const { return HoldOut{data.held_out, data.cache_held_out}; }
+};
+
+// Parses a config file's text; `file` names it in errors. Throws nec::InputError
+// "file: field 'optimizer.lr' must be a number" (also for unknown fields, bad
+// JSON and failed validation).
+OwoTrainingConfig parse_owo_training_config(const std::string& text, const std::string& file);
+// Every field, as a JSON document that parse_owo_training_config reads back.
+std::string owo_training_config_json(const OwoTrainingConfig& config);
+// The dotted fields whose values differ, e.g. {"optimizer.lr"}; the schedule
+// fields (steps, log_every, validate_every, checkpoint_every) are left out:
+// a resumed run may change them.
+std::vector<std::string> differing_fields(const OwoTrainingConfig& a, const OwoTrainingConfig& b);
+
+// Learning rate at `step` (1-based) of `total_steps`.
+double learning_rate(const OwoOptimizerConfig& optimizer, int64_t step, int64_t total_steps);
+
+// Reads every cache (nec::read_cache) and splits their skeletons: the
+// skeleton set of a run. Throws nec::InputError naming the cache when one
+// cannot be read, and naming the pattern when a hold-out pattern takes no skeleton.
+SkeletonSet load_skeleton_set(const std::vector<std::string>& caches, const HoldOut& hold_out,
+                              int64_t poses_per_skeleton, uint64_t seed);
+
+// "cpu", "cuda" or "cuda:N" as a device. Throws std::invalid_argument for
+// another name, std::runtime_error when this torch has no CUDA device.
+c10::Device training_device(const std::string& name);
+
+// training.json of a training checkpoint.
+struct OwoTrainingRecord {
+  int64_t step = 0;
+  OwoTrainingConfig config;
+  std::vector<std::string> data;                // the caches, as given to nec train owo
+  std::vector<std::string> train_skeletons;     // content hashes
+  std::vector<std::string> held_out_skeletons;  // content hashes
+};
+
+// <dir>/training.json, or std::nullopt when the directory has none (an OwO
+// checkpoint not written by nec train owo). Throws nec::InputError for a
+// damaged or foreign file.
+std::optional<OwoTrainingRecord> read_owo_training_record(const std::string& dir);
+
+class OwoTrainer {
+ public:
+  // `vectors` must outlive the trainer; nullptr trains without names (config.names false).
+  // Throws std::invalid_argument for an empty training set or names of the wrong width.
+  OwoTrainer(const OwoTrainingConfig& config, SkeletonSet skeletons, const text::WordVectors* vectors,
+             const c10::Device& device);
+  ~OwoTrainer();
+  OwoTrainer(const OwoTrainer&) = delete;
+  OwoTrainer& operator=(const OwoTrainer&) = delete;
+
+  // One optimizer step at `step` (1-based): learning rate from the schedule,
+  // a batch of augmented training skeletons drawn from (seed, step).
+  PretrainLosses step(int64_t step);
+  // Scores on the held-out (or training) skeletons, un-augmented.
+  std::vector<SkeletonScore> score_held_out();
+  std::vector<SkeletonScore> score_train();
+
+  // Writes a training checkpoint at `step` to `dir` (atomic, replacing one there).
+  void save(const std::string& dir, int64_t step, const std::vector<std::string>& data);
+  // Loads model and optimizer state from the training checkpoint `dir` and
+  // returns its step. Throws nec::InputError naming the file when it is not
+  // one, or when its config (differing_fields) or training skeletons differ.
+  int64_t resume(const std::string& dir);
+
+  OwoPretrainerImpl& model() { return *model_; }
+  const SkeletonSet& skeletons() const { return skeletons_; }
+  int64_t parameter_count() const;
+  // "cache a,b: 70 training skeletons (11-140 joints, augmented), 20 held out (spider 10, snake 10)"
+  std::string describe_data(const std::vector<std::string>& data) const;
+
+ private:
+  at::Tensor names_of(const std::vector<std::string>& canonical_names) const;
+
+  OwoTrainingConfig config_;
+  SkeletonSet skeletons_;
+  const text::WordVectors* vectors_;
+  c10::Device device_;
+  OwoPretrainer model_{nullptr};
+  std::unique_ptr<torch::optim::AdamW> optimizer_;
+  std::vector<std::vector<size_t>> buckets_;  // training skeleton indices by joint count, smallest first
+};
+
+}  // namespace nec::owo

@@ -1,0 +1,56 @@
+// Using a trained tokenizer on whole clips of any length: joint embeddings of
+// skeletons from the frozen OwO encoder, and windowed encode / decode.
+//
+//   at::Tensor h = embed_skeletons(*owo->encoder, {skeleton}, {canonical_names}, &vectors)[0];  // (J, D)
+//   at::Tensor codes = encode_clip(*tokenizer, features, h, WindowOptions{64, 16});  // (S, R)
+//   Features back = decode_clip(*tokenizer, codes, features.frame_count, target_h, target_joints, {64, 16});
+//
+// Windows: clips longer than window_frames are cut into windows that overlap
+// by overlap_frames (every window is encoded like a training crop: its frame 0
+// holds the absolute root height). Each token step is taken from the window
+// where it sits farthest from an edge. Decoding cuts the token sequence into
+// the same windows, decodes them together, and cross-fades the overlaps
+// linearly (rot6D, horizontal root displacement and absolute root height), so
+// the seams do not jump. Clips up to one window are a single window (padded to
+// a multiple of the downsampling by holding the last pose).
+#pragma once
+
+#include "nec/motion/features.h"
+#include "nec/owo/encoder.h"
+#include "nec/tat/tokenizer.h"
+#include "nec/text/word_vectors.h"
+
+#include <ATen/core/Tensor.h>
+
+#include <string>
+#include <vector>
+
+namespace nec::tat {
+
+// (B, Jmax, D) OwO joint embeddings of the skeletons (normalized, with their
+// canonical names), zero at padding; no gradient. `vectors` may be null only
+// when the encoder was trained without names (name_dim = 0); otherwise
+// InputError with text::kWordVectorHint.
+at::Tensor embed_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<Skeleton>& skeletons,
+                           const std::vector<std::vector<std::string>>& canonical_names,
+                           const text::WordVectors* vectors);
+
+struct WindowOptions {
+  int64_t window_frames = 64;   // frames per window, e.g. the training crop; a multiple of the downsampling
+  int64_t overlap_frames = 16;  // frames shared by neighbouring windows; a multiple of 2 x downsampling, < window
+
+  // Throws std::invalid_argument naming the bad field for a model with downsampling r.
+  void validate(int64_t downsampling) const;
+};
+
+// Token codes (S, R) int64 of a clip's Θ, S = ceil(T / r). `embeddings` (J, D)
+// for the clip's skeleton (undefined for the zero-padding baseline).
+at::Tensor encode_clip(TokenizerImpl& tokenizer, const Features& features, const at::Tensor& embeddings,
+                       const WindowOptions& windows);
+
+// Θ (frame_count, joint_count, 9) decoded from codes (S, R) for a skeleton with
+// `embeddings` (J, D) (undefined for the baseline); start_xz = (0, 0).
+Features decode_clip(TokenizerImpl& tokenizer, const at::Tensor& codes, int frame_count, const at::Tensor& embeddings,
+                     int joint_count, double fps, const WindowOptions& windows);
+
+}  // namespace nec::tat

@@ -1,0 +1,31 @@
+// Training losses of the tokenizer: feature reconstruction (rot6D and root
+// displacement), joint positions through differentiable FK, commitment.
+//
+//   ReconstructionLoss l = reconstruction_loss(out.reconstruction, x, out.commitment_loss, LossWeights{});
+//   l.total.backward();
+#pragma once
+
+#include "nec/tat/batch_tensors.h"
+
+namespace nec::tat {
+
+struct LossWeights {
+  double rotation = 1.0;  // L1 on the rot6D channels of real joints and frames
+  double root = 1.0;      // L1 on the root displacement Δ (normalized units per frame)
+  double position = 1.0;  // L1 on FK world positions, root trajectory included (normalized units)
+  double velocity = 0.5;  // L1 on frame-to-frame differences of FK positions
+
+  // Throws std::invalid_argument naming the first negative weight.
+  void validate() const;
+};
+
+struct ReconstructionLoss {
+  at::Tensor total;  // weighted sum + commitment, differentiable
+  double rotation = 0, root = 0, position = 0, velocity = 0, commitment = 0;  // unweighted terms
+};
+
+// prediction (B, T, J, 9) against target.features, masked by target's joint and frame masks.
+ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const BatchTensors& target,
+                                       const at::Tensor& commitment_loss, const LossWeights& weights);
+
+}  // namespace nec::tat

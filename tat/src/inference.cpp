@@ -1,0 +1,198 @@
+// Whole-clip encode / decode with overlapping windows, and OwO joint embeddings.
+#include "nec/tat/inference.h"
+
+#include "nec/motion/error.h"
+#include "nec/owo/graph.h"
+#include "nec/owo/joint_names.h"
+
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace nec::tat {
+namespace {
+
+int64_t round_up(int64_t value, int64_t multiple) { return (value + multiple - 1) / multiple * multiple; }
+
+// Where the windows of a clip of `frames` frames lie.
+struct WindowPlan {
+  int64_t length = 0;           // frames per window
+  std::vector<int64_t> starts;  // first frame of each window
+  std::vector<int64_t> owned;   // (windows + 1) token-step boundaries: window k owns [owned[k], owned[k + 1])
+  int64_t padded_frames() const { return starts.back() + length; }
+};
+
+WindowPlan plan_windows(int64_t frames, const WindowOptions& options, int64_t downsampling) {
+  WindowPlan plan;
+  if (frames <= options.window_frames) {
+    plan.length = round_up(frames, downsampling);
+    plan.starts = {0};
+  } else {
+    plan.length = options.window_frames;
+    const int64_t hop = options.window_frames - options.overlap_frames;
+    const int64_t count = (frames - options.window_frames + hop - 1) / hop + 1;
+    for (int64_t k = 0; k < count; ++k) plan.starts.push_back(k * hop);
+  }
+  plan.owned.push_back(0);
+  for (size_t k = 1; k < plan.starts.size(); ++k) {
+    plan.owned.push_back((plan.starts[k] + options.overlap_frames / 2) / downsampling);
+  }
+  plan.owned.push_back(round_up(frames, downsampling) / downsampling);
+  return plan;
+}
+
+void require_eval(const TokenizerImpl& tokenizer) {
+  if (tokenizer.is_training()) throw std::logic_error("tat inference: call tokenizer->eval() first");
+}
+
+// (n, J, D) embeddings and (n, J) mask for n windows of one skeleton.
+std::pair<at::Tensor, at::Tensor> skeleton_inputs(const at::Tensor& embeddings, int64_t joints, int64_t windows) {
+  const at::Tensor mask = torch::ones({windows, joints}, torch::kBool);
+  if (!embeddings.defined()) return {at::Tensor(), mask};
+  if (embeddings.dim() != 2 || embeddings.size(0) != joints) {
+    throw std::invalid_argument("tat inference: embeddings must be (J, D) with J = " + std::to_string(joints));
+  }
+  return {embeddings.unsqueeze(0).expand({windows, joints, embeddings.size(1)}).contiguous(), mask};
+}
+
+}  // namespace
+
+void WindowOptions::validate(int64_t downsampling) const {
+  if (window_frames <= 0 || window_frames % downsampling != 0) {
+    throw std::invalid_argument("window_frames must be a positive multiple of the downsampling " +
+                                std::to_string(downsampling) + ", got " + std::to_string(window_frames));
+  }
+  if (overlap_frames < 0 || overlap_frames % (2 * downsampling) != 0 || overlap_frames >= window_frames) {
+    throw std::invalid_argument("overlap_frames must be a multiple of " + std::to_string(2 * downsampling) +
+                                " below window_frames, got " + std::to_string(overlap_frames));
+  }
+}
+
+at::Tensor embed_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<Skeleton>& skeletons,
+                           const std::vector<std::vector<std::string>>& canonical_names,
+                           const text::WordVectors* vectors) {
+  if (skeletons.size() != canonical_names.size()) {
+    throw std::invalid_argument("embed_skeletons: one list of canonical names per skeleton");
+  }
+  const owo::OwoConfig& config = encoder.config();
+  if (config.name_dim > 0) {
+    if (vectors == nullptr) {
+      throw InputError(text::default_word_vectors_path(), 0,
+                       std::string("this model reads joint names and needs the word vectors; ") + text::kWordVectorHint);
+    }
+    if (vectors->dim() != config.name_dim) {
+      throw InputError(vectors->path(), 0,
+                       "word vectors of dimension " + std::to_string(vectors->dim()) + ", the model was trained with " +
+                           std::to_string(config.name_dim));
+    }
+  }
+  std::vector<owo::SkeletonGraph> graphs;
+  graphs.reserve(skeletons.size());
+  for (size_t i = 0; i < skeletons.size(); ++i) {
+    const at::Tensor names =
+        config.name_dim > 0 ? owo::name_embeddings(*vectors, canonical_names[i]) : at::Tensor();
+    graphs.push_back(owo::make_skeleton_graph(skeletons[i], names, config.graph));
+  }
+  c10::InferenceMode inference;
+  const c10::Device device = encoder.parameters().front().device();
+  return encoder.forward(owo::collate(graphs, config.name_dim).to(device)).joints;
+}
+
+at::Tensor encode_clip(TokenizerImpl& tokenizer, const Features& features, const at::Tensor& embeddings,
+                       const WindowOptions& windows) {
+  require_eval(tokenizer);
+  const int64_t r = tokenizer.config().downsampling();
+  windows.validate(r);
+  const int64_t frames = features.frame_count, joints = features.joint_count;
+  if (frames < 1) throw std::invalid_argument("encode_clip: the clip has no frames");
+  const WindowPlan plan = plan_windows(frames, windows, r);
+  const int64_t count = static_cast<int64_t>(plan.starts.size());
+
+  // The clip padded by holding its last pose, and its absolute root height per frame.
+  const at::Tensor clip =
+      torch::from_blob(const_cast<float*>(features.data.data()), {frames, joints, kFeatureSize}, torch::kFloat32);
+  at::Tensor padded = torch::cat({clip, clip.slice(0, frames - 1).expand({plan.padded_frames() - frames, joints,
+                                                                          kFeatureSize})});
+  padded.slice(0, frames).select(1, 0).slice(1, 0, 3).zero_();  // no root motion while holding
+  const at::Tensor height = padded.select(1, 0).select(1, 1).cumsum(0);
+
+  std::vector<at::Tensor> crops;
+  for (int64_t start : plan.starts) {
+    at::Tensor crop = padded.slice(0, start, start + plan.length).clone();
+    if (start > 0) {  // as a training crop: frame 0 holds (0, height, 0)
+      at::Tensor root_delta = crop[0][0].slice(0, 0, 3);
+      root_delta.zero_();
+      root_delta[1].copy_(height[start]);
+    }
+    crops.push_back(crop);
+  }
+  c10::InferenceMode inference;
+  const auto [batch_embeddings, mask] = skeleton_inputs(embeddings, joints, count);
+  const at::Tensor latent = tokenizer.encode(torch::stack(crops), mask, batch_embeddings);
+  const at::Tensor codes = tokenizer.quantize(latent).codes;  // (n, length / r, R)
+
+  std::vector<at::Tensor> owned;
+  for (int64_t k = 0; k < count; ++k) {
+    const int64_t first_step = plan.starts[k] / r;
+    owned.push_back(codes[k].slice(0, plan.owned[k] - first_step, plan.owned[k + 1] - first_step));
+  }
+  return torch::cat(owned).contiguous();
+}
+
+Features decode_clip(TokenizerImpl& tokenizer, const at::Tensor& codes, int frame_count, const at::Tensor& embeddings,
+                     int joint_count, double fps, const WindowOptions& windows) {
+  require_eval(tokenizer);
+  const int64_t r = tokenizer.config().downsampling();
+  windows.validate(r);
+  if (frame_count < 1) throw std::invalid_argument("decode_clip: frame_count must be positive");
+  const int64_t steps = round_up(frame_count, r) / r;
+  if (codes.dim() != 2 || codes.size(0) != steps) {
+    throw std::invalid_argument("decode_clip: codes must be (" + std::to_string(steps) + ", R) for " +
+                                std::to_string(frame_count) + " frames");
+  }
+  const WindowPlan plan = plan_windows(frame_count, windows, r);
+  const int64_t count = static_cast<int64_t>(plan.starts.size());
+  const int64_t window_steps = plan.length / r;
+
+  c10::InferenceMode inference;
+  std::vector<at::Tensor> window_codes;
+  for (int64_t start : plan.starts) {
+    const at::Tensor index = torch::arange(start / r, start / r + window_steps, torch::kLong).clamp_max(steps - 1);
+    window_codes.push_back(codes.index_select(0, index));
+  }
+  const auto [batch_embeddings, mask] = skeleton_inputs(embeddings, joint_count, count);
+  const at::Tensor latent = tokenizer.codes_to_latent(torch::stack(window_codes));
+  at::Tensor decoded = tokenizer.decode(latent, mask, batch_embeddings).to(torch::kFloat32);  // (n, length, J, 9)
+  // Blend in a space where windows agree: absolute root height instead of Δy.
+  decoded.select(2, 0).select(2, 1).copy_(decoded.select(2, 0).select(2, 1).cumsum(1));
+
+  const int64_t total = plan.padded_frames();
+  at::Tensor sum = torch::zeros({total, joint_count, kFeatureSize});
+  at::Tensor weight_sum = torch::zeros({total});
+  const double overlap = static_cast<double>(windows.overlap_frames);
+  for (int64_t k = 0; k < count; ++k) {
+    at::Tensor weight = torch::ones({plan.length});
+    auto w = weight.accessor<float, 1>();
+    for (int64_t f = 0; f < plan.length; ++f) {
+      if (k > 0 && f < windows.overlap_frames) w[f] = static_cast<float>((f + 0.5) / overlap);
+      if (k + 1 < count && f >= plan.length - windows.overlap_frames) {
+        w[f] = static_cast<float>((plan.length - f - 0.5) / overlap);
+      }
+    }
+    sum.slice(0, plan.starts[k], plan.starts[k] + plan.length) += decoded[k] * weight.view({-1, 1, 1});
+    weight_sum.slice(0, plan.starts[k], plan.starts[k] + plan.length) += weight;
+  }
+  at::Tensor blended = (sum / weight_sum.view({-1, 1, 1})).slice(0, 0, frame_count).contiguous();
+  at::Tensor height = blended.select(1, 0).select(1, 1).clone();
+  blended.select(1, 0).select(1, 1).slice(0, 1).copy_(height.slice(0, 1) - height.slice(0, 0, frame_count - 1));
+
+  Features out;
+  out.frame_count = frame_count;
+  out.joint_count = joint_count;
+  out.fps = fps;
+  out.data.assign(blended.data_ptr<float>(), blended.data_ptr<float>() + blended.numel());
+  return out;
+}
+
+}  // namespace nec::tat

@@ -1,0 +1,88 @@
+// Masked reconstruction loss of the tokenizer: rot6D, root displacement, FK
+// positions and velocities, plus the quantizer's commitment loss.
+#include "nec/tat/loss.h"
+
+#include "nec/tat/fk.h"
+
+#include <torch/torch.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace nec::tat {
+namespace {
+
+void require_weight(double value, const char* name) {
+  if (!(value >= 0.0)) throw std::invalid_argument(std::string("LossWeights: ") + name + " must be >= 0, got " +
+                                                   std::to_string(value));
+}
+
+// Mean of |a - b| over the entries where weight (broadcast to a) is 1: sum / (count * channels).
+at::Tensor masked_l1(const at::Tensor& a, const at::Tensor& b, const at::Tensor& weight) {
+  const int64_t channels = a.size(-1);
+  const at::Tensor count = weight.sum() * static_cast<double>(channels);
+  return ((a - b).abs() * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0);
+}
+
+}  // namespace
+
+void LossWeights::validate() const {
+  require_weight(rotation, "rotation");
+  require_weight(root, "root");
+  require_weight(position, "position");
+  require_weight(velocity, "velocity");
+}
+
+ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const BatchTensors& target,
+                                       const at::Tensor& commitment_loss, const LossWeights& weights) {
+  weights.validate();
+  if (!prediction.defined() || !prediction.sizes().equals(target.features.sizes())) {
+    throw std::invalid_argument("reconstruction_loss: prediction and target features differ in shape");
+  }
+  const int64_t b = prediction.size(0), t = prediction.size(1), j = prediction.size(2);
+  const auto type = prediction.scalar_type();
+  const at::Tensor frame = target.frame_mask.to(type);                                     // (B, T)
+  const at::Tensor real = frame.view({b, t, 1}) * target.joint_mask.to(type).view({b, 1, j});  // (B, T, J)
+
+  const at::Tensor rotation =
+      masked_l1(prediction.narrow(-1, 3, 6), target.features.narrow(-1, 3, 6), real);
+  const at::Tensor root =
+      masked_l1(prediction.select(2, 0).narrow(-1, 0, 3), target.features.select(2, 0).narrow(-1, 0, 3), frame);
+
+  const at::Tensor predicted_positions = features_to_positions(prediction, target.parents, target.offsets).positions;
+  at::Tensor target_positions;
+  {
+    torch::NoGradGuard no_grad;
+    target_positions = features_to_positions(target.features, target.parents, target.offsets).positions;
+  }
+  const at::Tensor position = masked_l1(predicted_positions, target_positions, real);
+  at::Tensor velocity = torch::zeros({}, prediction.options());
+  if (t > 1) {
+    const auto later = torch::indexing::Slice(1, torch::indexing::None);
+    const auto earlier = torch::indexing::Slice(torch::indexing::None, -1);
+    const at::Tensor both = real.index({torch::indexing::Slice(), later}) * real.index({torch::indexing::Slice(), earlier});
+    velocity = masked_l1(predicted_positions.index({torch::indexing::Slice(), later}) -
+                             predicted_positions.index({torch::indexing::Slice(), earlier}),
+                         target_positions.index({torch::indexing::Slice(), later}) -
+                             target_positions.index({torch::indexing::Slice(), earlier}),
+                         both);
+  }
+  const at::Tensor commitment =
+      commitment_loss.defined() ? commitment_loss.to(type).reshape({}) : torch::zeros({}, prediction.options());
+
+  ReconstructionLoss out;
+  out.total = weights.rotation * rotation + weights.root * root + weights.position * position +
+              weights.velocity * velocity + commitment;
+  // All five terms in one copy to the CPU (one device sync).
+  const at::Tensor terms = torch::stack({rotation, root, position, velocity, commitment}).detach().to(
+      torch::kCPU, torch::kDouble);
+  const double* values = terms.data_ptr<double>();
+  out.rotation = values[0];
+  out.root = values[1];
+  out.position = values[2];
+  out.velocity = values[3];
+  out.commitment = values[4];
+  return out;
+}
+
+}  // namespace nec::tat

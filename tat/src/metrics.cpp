@@ -1,0 +1,42 @@
+// MPJPE and GeoDist on masked batches.
+#include "nec/tat/metrics.h"
+
+#include "nec/tat/fk.h"
+
+#include <torch/torch.h>
+
+#include <cmath>
+
+namespace nec::tat {
+
+void ReconstructionMetrics::add(const at::Tensor& prediction, const at::Tensor& features, const at::Tensor& parents,
+                                const at::Tensor& offsets, const at::Tensor& joint_mask, const at::Tensor& frame_mask,
+                                double scale) {
+  torch::NoGradGuard no_grad;
+  const FkResult predicted = features_to_positions(prediction.to(torch::kFloat64), parents, offsets.to(torch::kFloat64));
+  const FkResult truth = features_to_positions(features.to(torch::kFloat64), parents, offsets.to(torch::kFloat64));
+  // (B, T, J) weight of real joints in real frames.
+  const at::Tensor mask = (frame_mask.unsqueeze(2) & joint_mask.unsqueeze(1)).to(torch::kFloat64);
+  const at::Tensor world = (predicted.positions - truth.positions).norm(2, -1);
+  const at::Tensor local = ((predicted.positions - predicted.positions.slice(2, 0, 1)) -
+                            (truth.positions - truth.positions.slice(2, 0, 1)))
+                               .norm(2, -1);
+  // Rotations as stored: local for joints, global for the root.
+  const at::Tensor r_pred = rot6d_to_matrix(prediction.slice(-1, 3, 9).to(torch::kFloat64));
+  const at::Tensor r_true = rot6d_to_matrix(features.slice(-1, 3, 9).to(torch::kFloat64));
+  const at::Tensor trace = (r_pred * r_true).sum({-1, -2});  // tr(R̂ᵀ R)
+  const at::Tensor angle = ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos() * (180.0 / M_PI);
+  position_error_sum += scale * (world * mask).sum().item<double>();
+  local_position_error_sum += scale * (local * mask).sum().item<double>();
+  angle_error_sum += (angle * mask).sum().item<double>();
+  count += static_cast<int64_t>(mask.sum().item<double>());
+}
+
+void ReconstructionMetrics::add(const ReconstructionMetrics& other) {
+  position_error_sum += other.position_error_sum;
+  local_position_error_sum += other.local_position_error_sum;
+  angle_error_sum += other.angle_error_sum;
+  count += other.count;
+}
+
+}  // namespace nec::tat

@@ -1,0 +1,480 @@
+// TAT (NECromancer 4.3): the virtual-joint spatio-temporal tokenizer and the
+// zero-padding RVQ-VAE baseline, sharing the temporal blocks and the quantizer.
+#include "nec/tat/tokenizer.h"
+
+#include <torch/torch.h>
+
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+namespace nec::tat {
+namespace {
+
+constexpr int64_t kResidualDilation = 3;  // dilation of the ResNet1D unit's 3-tap conv
+constexpr int64_t kFeedForwardMult = 2;   // attention FFN hidden width = 2 * dim
+constexpr double kMaskedScore = -1e9;     // attention score of a padded key (finite: no NaN)
+
+void require(bool ok, const std::string& message) {
+  if (!ok) throw std::invalid_argument("TatConfig: " + message);
+}
+
+bool is_nec(TokenizerKind kind) { return kind != TokenizerKind::ZeroPadRvq; }
+
+torch::nn::Conv1d conv1d(int64_t in, int64_t out, int64_t kernel, int64_t stride = 1, int64_t padding = 0,
+                         int64_t dilation = 1) {
+  return torch::nn::Conv1d(
+      torch::nn::Conv1dOptions(in, out, kernel).stride(stride).padding(padding).dilation(dilation));
+}
+
+// The rot6D of the identity, the rest pose the decoders predict offsets from: (9).
+at::Tensor rest_pose_features(const at::TensorOptions& options) {
+  at::Tensor rest = torch::zeros({9}, options);
+  rest.narrow(0, 3, 1).fill_(1.0);
+  rest.narrow(0, 7, 1).fill_(1.0);
+  return rest;
+}
+
+// ResNet1D unit (as T2M-GPT): x + conv1x1(ReLU(dilated conv3(ReLU(x)))). (N, D, T) -> (N, D, T).
+class ResidualUnitImpl : public torch::nn::Module {
+ public:
+  explicit ResidualUnitImpl(int64_t dim) {
+    dilated_ = register_module("dilated", conv1d(dim, dim, 3, 1, kResidualDilation, kResidualDilation));
+    pointwise_ = register_module("pointwise", conv1d(dim, dim, 1));
+  }
+  at::Tensor forward(const at::Tensor& x) { return x + pointwise_(torch::relu(dilated_(torch::relu(x)))); }
+
+ private:
+  torch::nn::Conv1d dilated_{nullptr}, pointwise_{nullptr};
+};
+TORCH_MODULE(ResidualUnit);
+
+// Temporal downsampling by 2: conv (kernel 4, stride 2) + ResNet1D. (N, D, T) -> (N, D, T / 2).
+class DownBlockImpl : public torch::nn::Module {
+ public:
+  explicit DownBlockImpl(int64_t dim) {
+    conv_ = register_module("conv", conv1d(dim, dim, 4, 2, 1));
+    residual_ = register_module("residual", ResidualUnit(dim));
+  }
+  at::Tensor forward(const at::Tensor& x) { return residual_(conv_(x)); }
+
+ private:
+  torch::nn::Conv1d conv_{nullptr};
+  ResidualUnit residual_{nullptr};
+};
+TORCH_MODULE(DownBlock);
+
+// Temporal upsampling by 2: nearest neighbour, conv (kernel 3) + ResNet1D. (N, D, T) -> (N, D, 2 T).
+class UpBlockImpl : public torch::nn::Module {
+ public:
+  explicit UpBlockImpl(int64_t dim) {
+    conv_ = register_module("conv", conv1d(dim, dim, 3, 1, 1));
+    residual_ = register_module("residual", ResidualUnit(dim));
+  }
+  at::Tensor forward(const at::Tensor& x) {
+    const at::Tensor repeated = x.unsqueeze(-1).expand({x.size(0), x.size(1), x.size(2), 2}).reshape(
+        {x.size(0), x.size(1), 2 * x.size(2)});
+    return residual_(conv_(repeated));
+  }
+
+ private:
+  torch::nn::Conv1d conv_{nullptr};
+  ResidualUnit residual_{nullptr};
+};
+TORCH_MODULE(UpBlock);
+
+// Pre-norm transformer encoder layer over the tokens of each time step:
+// x + MHA(LN(x)), then x + FFN(LN(x)). Keys are masked by an additive bias.
+class SpatialAttentionImpl : public torch::nn::Module {
+ public:
+  SpatialAttentionImpl(int64_t dim, int64_t heads) : heads_(heads) {
+    attention_norm_ = register_module("attention_norm", torch::nn::LayerNorm(torch::nn::LayerNormOptions({dim})));
+    qkv_ = register_module("qkv", torch::nn::Linear(dim, 3 * dim));
+    out_ = register_module("out", torch::nn::Linear(dim, dim));
+    ffn_norm_ = register_module("ffn_norm", torch::nn::LayerNorm(torch::nn::LayerNormOptions({dim})));
+    ffn_in_ = register_module("ffn_in", torch::nn::Linear(dim, kFeedForwardMult * dim));
+    ffn_out_ = register_module("ffn_out", torch::nn::Linear(kFeedForwardMult * dim, dim));
+  }
+
+  // x (B, T, N, D); key_bias (B, 1, 1, 1, N) float, 0 for real keys and kMaskedScore for padding.
+  // Returns (B, T, N, D), or (B, T, 1, D) for token 0 alone when first_token_only
+  // (the encoder's last layer: only the virtual joint goes on).
+  at::Tensor forward(const at::Tensor& x, const at::Tensor& key_bias, bool first_token_only = false) {
+    const int64_t b = x.size(0), t = x.size(1), n = x.size(2), d = x.size(3), head_dim = d / heads_;
+    const int64_t queries = first_token_only ? 1 : n;
+    const at::Tensor normalized = attention_norm_(x);
+    // (3, B, T, H, N, Dh) for the keys and values of every token.
+    const at::Tensor qkv = qkv_(normalized).view({b, t, n, 3, heads_, head_dim}).permute({3, 0, 1, 4, 2, 5});
+    const at::Tensor query = qkv[0].narrow(3, 0, queries) * (1.0 / std::sqrt(static_cast<double>(head_dim)));
+    const at::Tensor scores = torch::matmul(query, qkv[1].transpose(-1, -2)) + key_bias;  // (B, T, H, Q, N)
+    const at::Tensor mixed = torch::matmul(torch::softmax(scores, -1), qkv[2]);          // (B, T, H, Q, Dh)
+    const at::Tensor attended =
+        x.narrow(2, 0, queries) + out_(mixed.permute({0, 1, 3, 2, 4}).reshape({b, t, queries, d}));
+    return attended + ffn_out_(torch::gelu(ffn_in_(ffn_norm_(attended))));
+  }
+
+ private:
+  int64_t heads_;
+  torch::nn::LayerNorm attention_norm_{nullptr}, ffn_norm_{nullptr};
+  torch::nn::Linear qkv_{nullptr}, out_{nullptr}, ffn_in_{nullptr}, ffn_out_{nullptr};
+};
+TORCH_MODULE(SpatialAttention);
+
+// Applies a temporal block to every token sequence: (B, T, N, D) -> (B, T', N, D).
+template <typename Block>
+at::Tensor per_token(const std::shared_ptr<Block>& block, const at::Tensor& tokens) {
+  const int64_t b = tokens.size(0), t = tokens.size(1), n = tokens.size(2), d = tokens.size(3);
+  const at::Tensor sequences = tokens.permute({0, 2, 3, 1}).reshape({b * n, d, t});
+  const at::Tensor out = block->forward(sequences);
+  return out.view({b, n, d, out.size(2)}).permute({0, 3, 1, 2}).contiguous();
+}
+
+// (B, J) joint mask -> (B, 1, 1, 1, 1 + J) additive key bias; token 0 (the virtual joint) is never masked.
+at::Tensor key_bias(const at::Tensor& joint_mask, const at::TensorOptions& options) {
+  const at::Tensor keep = torch::cat({torch::ones({joint_mask.size(0), 1}, joint_mask.options()), joint_mask}, 1);
+  const at::Tensor bias = torch::zeros(keep.sizes(), options).masked_fill_(keep.logical_not(), kMaskedScore);
+  return bias.view({keep.size(0), 1, 1, 1, keep.size(1)});
+}
+
+}  // namespace
+
+namespace detail {
+
+// One half of a tokenizer. joint_mask (B, J) bool; joint_embeddings (B, J, E) or undefined.
+class EncoderImpl : public torch::nn::Module {
+ public:
+  // features (B, T, J, 9) -> latent (B, T / r, C)
+  virtual at::Tensor forward(const at::Tensor& features, const at::Tensor& joint_mask,
+                             const at::Tensor& joint_embeddings) = 0;
+};
+
+class DecoderImpl : public torch::nn::Module {
+ public:
+  // quantized (B, S, C) -> features (B, S * r, J, 9), zero at padded joints
+  virtual at::Tensor forward(const at::Tensor& quantized, const at::Tensor& joint_mask,
+                             const at::Tensor& joint_embeddings) = 0;
+};
+
+}  // namespace detail
+
+namespace {
+
+// NEC encoder: per joint MLP(Θ) + Proj(h), the virtual joint as token 0, then
+// per block a temporal block per token and spatial attention over the tokens.
+class NecEncoderImpl : public detail::EncoderImpl {
+ public:
+  explicit NecEncoderImpl(const TatConfig& config) {
+    const int64_t d = config.dim;
+    input_ = register_module("input", torch::nn::Sequential(torch::nn::Linear(9, d), torch::nn::ReLU(),
+                                                            torch::nn::Linear(d, d)));
+    embedding_ = register_module("embedding", torch::nn::Linear(config.joint_embedding_dim, d));
+    virtual_joint_ = register_parameter("virtual_joint", torch::randn({d}) * 0.02);
+    temporal_ = register_module("temporal", torch::nn::ModuleList());
+    spatial_ = register_module("spatial", torch::nn::ModuleList());
+    for (int64_t block = 0; block < config.blocks; ++block) {
+      temporal_->push_back(DownBlock(d));
+      for (int64_t layer = 0; layer < config.attention_layers; ++layer) {
+        spatial_->push_back(SpatialAttention(d, config.heads));
+      }
+    }
+    attention_layers_ = config.attention_layers;
+    to_latent_ = register_module("to_latent", torch::nn::Linear(d, config.quantizer.code_dim));
+  }
+
+  at::Tensor forward(const at::Tensor& features, const at::Tensor& joint_mask,
+                     const at::Tensor& joint_embeddings) override {
+    const int64_t b = features.size(0), t = features.size(1);
+    const at::Tensor joints = input_->forward(features) + embedding_(joint_embeddings).unsqueeze(1);  // (B, T, J, D)
+    at::Tensor tokens = torch::cat({virtual_joint_.expand({b, t, 1, virtual_joint_.size(0)}), joints}, 2);
+    const at::Tensor bias = key_bias(joint_mask, tokens.options());
+    const size_t blocks = temporal_->size();
+    for (size_t block = 0; block < blocks; ++block) {
+      tokens = per_token(temporal_->ptr<DownBlockImpl>(block), tokens);
+      for (int64_t layer = 0; layer < attention_layers_; ++layer) {
+        // The very last layer only needs the virtual joint's output.
+        const bool last = block + 1 == blocks && layer + 1 == attention_layers_;
+        tokens = spatial_->ptr<SpatialAttentionImpl>(block * attention_layers_ + layer)->forward(tokens, bias, last);
+      }
+    }
+    return to_latent_(tokens.select(2, 0));  // the virtual joint, (B, T / r, C)
+  }
+
+ private:
+  int64_t attention_layers_ = 1;
+  torch::nn::Sequential input_{nullptr};
+  torch::nn::Linear embedding_{nullptr}, to_latent_{nullptr};
+  at::Tensor virtual_joint_;  // (D)
+  torch::nn::ModuleList temporal_{nullptr}, spatial_{nullptr};
+};
+
+// NEC decoder: z_t as the virtual joint, MLP([z_t ‖ h_j]) per joint, then per
+// block spatial attention and a temporal upsampling block per token, linear to 9.
+class NecDecoderImpl : public detail::DecoderImpl {
+ public:
+  explicit NecDecoderImpl(const TatConfig& config) {
+    const int64_t d = config.dim, c = config.quantizer.code_dim;
+    virtual_from_latent_ = register_module("virtual_from_latent", torch::nn::Linear(c, d));
+    // First layer of MLP([z ‖ h]) split in its z and h columns: no (B, S, J, C + E) concatenation.
+    joint_from_latent_ = register_module("joint_from_latent", torch::nn::Linear(c, d));
+    joint_from_embedding_ = register_module(
+        "joint_from_embedding", torch::nn::Linear(torch::nn::LinearOptions(config.joint_embedding_dim, d).bias(false)));
+    joint_hidden_ = register_module("joint_hidden", torch::nn::Linear(d, d));
+    spatial_ = register_module("spatial", torch::nn::ModuleList());
+    temporal_ = register_module("temporal", torch::nn::ModuleList());
+    for (int64_t block = 0; block < config.blocks; ++block) {
+      for (int64_t layer = 0; layer < config.attention_layers; ++layer) {
+        spatial_->push_back(SpatialAttention(d, config.heads));
+      }
+      temporal_->push_back(UpBlock(d));
+    }
+    attention_layers_ = config.attention_layers;
+    output_ = register_module("output", torch::nn::Linear(d, 9));
+  }
+
+  at::Tensor forward(const at::Tensor& quantized, const at::Tensor& joint_mask,
+                     const at::Tensor& joint_embeddings) override {
+    const int64_t joints = joint_mask.size(1);
+    const at::Tensor virtual_joint = virtual_from_latent_(quantized).unsqueeze(2);  // (B, S, 1, D)
+    const at::Tensor joint_features = joint_hidden_(torch::relu(
+        joint_from_latent_(quantized).unsqueeze(2) + joint_from_embedding_(joint_embeddings).unsqueeze(1)));
+    at::Tensor tokens = torch::cat({virtual_joint, joint_features}, 2);  // (B, S, 1 + J, D)
+    const at::Tensor bias = key_bias(joint_mask, tokens.options());
+    const size_t blocks = temporal_->size();
+    for (size_t block = 0; block < blocks; ++block) {
+      for (int64_t layer = 0; layer < attention_layers_; ++layer) {
+        tokens = spatial_->ptr<SpatialAttentionImpl>(block * attention_layers_ + layer)->forward(tokens, bias);
+      }
+      // After the last attention nothing reads the virtual joint: drop it.
+      if (block + 1 == blocks) tokens = tokens.narrow(2, 1, joints);
+      tokens = per_token(temporal_->ptr<UpBlockImpl>(block), tokens);
+    }
+    const at::Tensor out = output_(tokens) + rest_pose_features(tokens.options());  // (B, T, J, 9)
+    return out * joint_mask.view({joint_mask.size(0), 1, joints, 1}).to(out.scalar_type());
+  }
+
+ private:
+  int64_t attention_layers_ = 1;
+  torch::nn::Linear virtual_from_latent_{nullptr}, joint_from_latent_{nullptr}, joint_from_embedding_{nullptr},
+      joint_hidden_{nullptr}, output_{nullptr};
+  torch::nn::ModuleList spatial_{nullptr}, temporal_{nullptr};
+};
+
+// Zero-padding baseline encoder: (B, T, J, 9) -> channels (B, 9 max_joints, T),
+// conv 3, the same temporal blocks, conv 3 to the latent width.
+class PaddedEncoderImpl : public detail::EncoderImpl {
+ public:
+  explicit PaddedEncoderImpl(const TatConfig& config) : max_joints_(config.max_joints) {
+    const int64_t d = config.dim;
+    input_ = register_module("input", conv1d(9 * max_joints_, d, 3, 1, 1));
+    temporal_ = register_module("temporal", torch::nn::ModuleList());
+    for (int64_t block = 0; block < config.blocks; ++block) temporal_->push_back(DownBlock(d));
+    to_latent_ = register_module("to_latent", conv1d(d, config.quantizer.code_dim, 3, 1, 1));
+  }
+
+  at::Tensor forward(const at::Tensor& features, const at::Tensor& joint_mask, const at::Tensor&) override {
+    const int64_t b = features.size(0), t = features.size(1), joints = features.size(2);
+    const at::Tensor real = features * joint_mask.view({b, 1, joints, 1}).to(features.scalar_type());
+    const at::Tensor padded = torch::constant_pad_nd(real, {0, 0, 0, max_joints_ - joints});  // (B, T, Jmax, 9)
+    at::Tensor x = torch::relu(input_(padded.view({b, t, 9 * max_joints_}).transpose(1, 2)));
+    for (size_t block = 0; block < temporal_->size(); ++block) x = temporal_->ptr<DownBlockImpl>(block)->forward(x);
+    return to_latent_(x).transpose(1, 2).contiguous();  // (B, T / r, C)
+  }
+
+ private:
+  int64_t max_joints_;
+  torch::nn::Conv1d input_{nullptr}, to_latent_{nullptr};
+  torch::nn::ModuleList temporal_{nullptr};
+};
+
+// Zero-padding baseline decoder, the encoder mirrored; output cropped to the batch's J.
+class PaddedDecoderImpl : public detail::DecoderImpl {
+ public:
+  explicit PaddedDecoderImpl(const TatConfig& config) : max_joints_(config.max_joints) {
+    const int64_t d = config.dim;
+    from_latent_ = register_module("from_latent", conv1d(config.quantizer.code_dim, d, 3, 1, 1));
+    temporal_ = register_module("temporal", torch::nn::ModuleList());
+    for (int64_t block = 0; block < config.blocks; ++block) temporal_->push_back(UpBlock(d));
+    output_ = register_module("output", conv1d(d, 9 * max_joints_, 3, 1, 1));
+  }
+
+  at::Tensor forward(const at::Tensor& quantized, const at::Tensor& joint_mask, const at::Tensor&) override {
+    const int64_t b = quantized.size(0), joints = joint_mask.size(1);
+    at::Tensor x = torch::relu(from_latent_(quantized.transpose(1, 2)));
+    for (size_t block = 0; block < temporal_->size(); ++block) x = temporal_->ptr<UpBlockImpl>(block)->forward(x);
+    const at::Tensor channels = output_(x).transpose(1, 2);  // (B, T, 9 Jmax)
+    const int64_t t = channels.size(1);
+    const at::Tensor out =
+        channels.reshape({b, t, max_joints_, 9}).narrow(2, 0, joints) + rest_pose_features(channels.options());
+    return out * joint_mask.view({b, 1, joints, 1}).to(out.scalar_type());
+  }
+
+ private:
+  int64_t max_joints_;
+  torch::nn::Conv1d from_latent_{nullptr}, output_{nullptr};
+  torch::nn::ModuleList temporal_{nullptr};
+};
+
+void check_input(bool ok, const std::string& message) {
+  if (!ok) throw std::invalid_argument("Tokenizer: " + message);
+}
+
+std::string shape_of(const at::Tensor& x) {
+  if (!x.defined()) return "undefined";
+  std::ostringstream out;
+  out << x.sizes();
+  return out.str();
+}
+
+}  // namespace
+
+std::string to_string(TokenizerKind kind) {
+  switch (kind) {
+    case TokenizerKind::NecRvq: return "nec-rvq";
+    case TokenizerKind::NecVq: return "nec-vq";
+    case TokenizerKind::ZeroPadRvq: return "zero-pad-rvq";
+  }
+  throw std::invalid_argument("to_string: unknown TokenizerKind");
+}
+
+TokenizerKind tokenizer_kind_from_string(const std::string& name) {
+  for (TokenizerKind kind : {TokenizerKind::NecRvq, TokenizerKind::NecVq, TokenizerKind::ZeroPadRvq}) {
+    if (to_string(kind) == name) return kind;
+  }
+  throw std::invalid_argument("unknown tokenizer kind '" + name + "' (expected nec-rvq, nec-vq or zero-pad-rvq)");
+}
+
+void TatConfig::validate() const {
+  require(dim >= 1, "dim must be >= 1, got " + std::to_string(dim));
+  require(blocks >= 1 && blocks <= 16, "blocks must be in [1, 16], got " + std::to_string(blocks));
+  quantizer.validate();
+  if (is_nec(kind)) {
+    require(joint_embedding_dim >= 1, "joint_embedding_dim must be >= 1, got " + std::to_string(joint_embedding_dim));
+    require(attention_layers >= 1, "attention_layers must be >= 1 (the virtual joint sees the joints only "
+                                   "through attention), got " + std::to_string(attention_layers));
+    require(heads >= 1 && dim % heads == 0,
+            "heads must divide dim, got heads = " + std::to_string(heads) + ", dim = " + std::to_string(dim));
+  }
+  if (kind == TokenizerKind::NecVq) {
+    require(quantizer.layers == 1,
+            "nec-vq uses a single codebook: quantizer.layers must be 1, got " + std::to_string(quantizer.layers));
+  }
+  if (kind == TokenizerKind::ZeroPadRvq) {
+    require(max_joints >= 1, "zero-pad-rvq needs max_joints >= 1 (the padded joint count), got " +
+                                 std::to_string(max_joints));
+  }
+}
+
+std::string TatConfig::to_string() const {
+  std::ostringstream out;
+  out << "TatConfig(kind=" << nec::tat::to_string(kind) << ", joint_embedding_dim=" << joint_embedding_dim
+      << ", dim=" << dim << ", blocks=" << blocks << ", attention_layers=" << attention_layers << ", heads=" << heads
+      << ", max_joints=" << max_joints << ", quantizer.layers=" << quantizer.layers
+      << ", quantizer.codebook_size=" << quantizer.codebook_size << ", quantizer.code_dim=" << quantizer.code_dim
+      << ", quantizer.ema_decay=" << quantizer.ema_decay
+      << ", quantizer.commitment_weight=" << quantizer.commitment_weight
+      << ", quantizer.dead_code_threshold=" << quantizer.dead_code_threshold
+      << ", quantizer.quantize_dropout=" << quantizer.quantize_dropout << ")";
+  return out.str();
+}
+
+TokenizerImpl::TokenizerImpl(const TatConfig& config) : config_(config) {
+  config_.validate();
+  if (is_nec(config_.kind)) {
+    encoder_ = register_module("encoder", std::make_shared<NecEncoderImpl>(config_));
+    decoder_ = register_module("decoder", std::make_shared<NecDecoderImpl>(config_));
+  } else {
+    encoder_ = register_module("encoder", std::make_shared<PaddedEncoderImpl>(config_));
+    decoder_ = register_module("decoder", std::make_shared<PaddedDecoderImpl>(config_));
+  }
+  quantizer_ = register_module("quantizer", ResidualQuantizer(config_.quantizer));
+}
+
+at::Tensor TokenizerImpl::encode(const at::Tensor& features, const at::Tensor& joint_mask,
+                                 const at::Tensor& joint_embeddings) {
+  check_input(features.defined() && features.dim() == 4 && features.size(3) == 9,
+              "features must be (B, T, J, 9), got " + shape_of(features));
+  const int64_t b = features.size(0), t = features.size(1), joints = features.size(2), r = config_.downsampling();
+  check_input(t % r == 0, "the frame count T = " + std::to_string(t) + " is not a multiple of the downsampling r = " +
+                              std::to_string(r) + " (2^blocks); crop or pad the clip to a multiple of " +
+                              std::to_string(r));
+  check_input(joint_mask.defined() && joint_mask.dim() == 2 && joint_mask.size(0) == b && joint_mask.size(1) == joints,
+              "joint_mask must be (B, J) = (" + std::to_string(b) + ", " + std::to_string(joints) + "), got " +
+                  shape_of(joint_mask));
+  if (is_nec(config_.kind)) {
+    check_input(joint_embeddings.defined() && joint_embeddings.dim() == 3 && joint_embeddings.size(0) == b &&
+                    joint_embeddings.size(1) == joints && joint_embeddings.size(2) == config_.joint_embedding_dim,
+                "joint_embeddings must be (B, J, E) = (" + std::to_string(b) + ", " + std::to_string(joints) + ", " +
+                    std::to_string(config_.joint_embedding_dim) + "), got " + shape_of(joint_embeddings));
+  } else {
+    check_input(joints <= config_.max_joints, "the batch has " + std::to_string(joints) +
+                                                  " joints, more than this zero-pad-rvq model's max_joints = " +
+                                                  std::to_string(config_.max_joints));
+  }
+  return encoder_->forward(features, joint_mask.to(torch::kBool), joint_embeddings);
+}
+
+QuantizerOutput TokenizerImpl::quantize(const at::Tensor& latent, const at::Tensor& step_mask) {
+  check_input(latent.defined() && latent.dim() == 3 && latent.size(2) == config_.quantizer.code_dim,
+              "latent must be (B, S, " + std::to_string(config_.quantizer.code_dim) + "), got " + shape_of(latent));
+  const int64_t b = latent.size(0), s = latent.size(1);
+  if (step_mask.defined()) {
+    check_input(step_mask.dim() == 2 && step_mask.size(0) == b && step_mask.size(1) == s,
+                "step_mask must be (B, S) = (" + std::to_string(b) + ", " + std::to_string(s) + "), got " +
+                    shape_of(step_mask));
+  }
+  QuantizerOutput q = quantizer_->forward(latent.reshape({b * s, latent.size(2)}),
+                                          step_mask.defined() ? step_mask.reshape({b * s}).to(torch::kBool) : at::Tensor());
+  q.quantized = q.quantized.view({b, s, latent.size(2)});
+  q.codes = q.codes.view({b, s, config_.quantizer.layers});
+  return q;
+}
+
+at::Tensor TokenizerImpl::decode(const at::Tensor& quantized, const at::Tensor& joint_mask,
+                                 const at::Tensor& joint_embeddings) {
+  check_input(quantized.defined() && quantized.dim() == 3 && quantized.size(2) == config_.quantizer.code_dim,
+              "quantized must be (B, S, " + std::to_string(config_.quantizer.code_dim) + "), got " +
+                  shape_of(quantized));
+  const int64_t b = quantized.size(0);
+  check_input(joint_mask.defined() && joint_mask.dim() == 2 && joint_mask.size(0) == b,
+              "joint_mask must be (B, J) with B = " + std::to_string(b) + ", got " + shape_of(joint_mask));
+  const int64_t joints = joint_mask.size(1);
+  if (is_nec(config_.kind)) {
+    check_input(joint_embeddings.defined() && joint_embeddings.dim() == 3 && joint_embeddings.size(0) == b &&
+                    joint_embeddings.size(1) == joints && joint_embeddings.size(2) == config_.joint_embedding_dim,
+                "joint_embeddings must be (B, J, E) = (" + std::to_string(b) + ", " + std::to_string(joints) + ", " +
+                    std::to_string(config_.joint_embedding_dim) + "), got " + shape_of(joint_embeddings));
+  } else {
+    check_input(joints <= config_.max_joints, "the target has " + std::to_string(joints) +
+                                                  " joints, more than this zero-pad-rvq model's max_joints = " +
+                                                  std::to_string(config_.max_joints));
+  }
+  return decoder_->forward(quantized, joint_mask.to(torch::kBool), joint_embeddings);
+}
+
+at::Tensor TokenizerImpl::codes_to_latent(const at::Tensor& codes) {
+  check_input(codes.defined() && codes.dim() == 3, "codes must be (B, S, R), got " + shape_of(codes));
+  return quantizer_->codes_to_latent(codes);
+}
+
+TokenizerOutput TokenizerImpl::forward(const at::Tensor& features, const at::Tensor& joint_mask,
+                                       const at::Tensor& frame_mask, const at::Tensor& joint_embeddings) {
+  const at::Tensor latent = encode(features, joint_mask, joint_embeddings);  // (B, S, C)
+  const int64_t b = latent.size(0), s = latent.size(1);
+  at::Tensor step_mask;  // a step is real when any of its r frames is
+  if (frame_mask.defined()) {
+    check_input(frame_mask.dim() == 2 && frame_mask.size(0) == b && frame_mask.size(1) == features.size(1),
+                "frame_mask must be (B, T) = (" + std::to_string(b) + ", " + std::to_string(features.size(1)) +
+                    "), got " + shape_of(frame_mask));
+    step_mask = frame_mask.to(torch::kBool).reshape({b, s, config_.downsampling()}).any(-1);
+  }
+  QuantizerOutput q = quantize(latent, step_mask);
+  TokenizerOutput out;
+  out.reconstruction = decode(q.quantized, joint_mask, joint_embeddings);
+  out.codes = q.codes;
+  out.commitment_loss = q.commitment_loss;
+  out.perplexity = q.perplexity;
+  return out;
+}
+
+}  // namespace nec::tat

@@ -1,0 +1,223 @@
+// The tokenizer commands end to end on a tiny zoo: nec train tat (checkpoints,
+// --resume, baselines), encode, decode, transfer and eval recon, and their
+// errors on bad input.
+#include "nec/motion/bvh.h"
+#include "nec/motion/files.h"
+#include "nec/tat/tokens.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <memory>
+
+namespace nec {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CommandResult;
+using testing::run_nec;
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+constexpr const char* kOwoConfig = R"({
+  "encoder": {"name_dim": 0, "dim": 16, "layers": 1, "heads": 2, "edge_dim": 8},
+  "pretrain": {"pairs_per_skeleton": 16},
+  "optimizer": {"lr": 0.003, "warmup_steps": 2},
+  "data": {"held_out": ["spider"], "poses_per_skeleton": 4},
+  "names": false, "batch_size": 4, "steps": 4, "log_every": 2, "validate_every": 4, "checkpoint_every": 4, "seed": 3
+})";
+
+std::string tat_config(double learning_rate = 3e-3) {
+  return R"({"model": {"kind": "nec-rvq", "dim": 16, "blocks": 2, "attention_layers": 1, "heads": 2,
+  "quantizer": {"layers": 2, "codebook_size": 16, "code_dim": 16}},
+  "learning_rate": )" + std::to_string(learning_rate) + R"(, "final_learning_rate": 0.0, "warmup_steps": 2, "steps": 6,
+  "batch_size": 4, "window_frames": 16, "log_every": 2, "validate_every": 3, "validation_batches": 1,
+  "checkpoint_every": 3, "seed": 1})";
+}
+
+class CliTat : public ::testing::Test {
+ protected:
+  // One zoo, cache, OwO encoder and trained tokenizer for every test.
+  static void SetUpTestSuite() {
+    shared_ = std::make_unique<testing::TempDir>();
+    const testing::TempDir& d = *shared_;
+    const CommandResult zoo = run_nec("zoo --out " + d / "zoo" + " --creatures 9 --clips-per-creature 2 --seconds 2 "
+                                      "--seed 5 --hold-out spider --quiet");
+    ASSERT_EQ(zoo.exit_code, 0) << zoo.output;
+    const CommandResult prepare = run_nec("prepare zoo=" + d / "zoo/seen" + " held=" + d / "zoo/held_out" +
+                                          " --hold-out-dataset held --val 0.2 --test 0.2 -o " + d / "cache" + " --quiet");
+    ASSERT_EQ(prepare.exit_code, 0) << prepare.output;
+    const CommandResult owo = run_nec("train owo --config " + d.write("owo.json", kOwoConfig) + " --data " +
+                                      d / "cache" + " --out " + d / "owo" + " --no-names --threads 1");
+    ASSERT_EQ(owo.exit_code, 0) << owo.output;
+    const CommandResult tat = run_nec("train tat --config " + d.write("tat.json", tat_config()) + " --data " +
+                                      d / "cache" + " --owo " + d / "owo" + " --out " + d / "tat" + " --threads 1");
+    ASSERT_EQ(tat.exit_code, 0) << tat.output;
+  }
+  static void TearDownTestSuite() { shared_.reset(); }
+
+  static std::string shared(const std::string& name) { return *shared_ / name; }
+  // A zoo clip of creature `index` (c000 ...), e.g. clip("c001") for the quadruped.
+  static std::string zoo_clip(const std::string& creature_prefix) {
+    for (const std::string& file : testing::bvh_files_under(shared("zoo"))) {
+      if (contains(fs::path(file).filename().string(), creature_prefix)) return file;
+    }
+    return "";
+  }
+  std::string path(const std::string& name) const { return dir_ / name; }
+
+  static std::unique_ptr<testing::TempDir> shared_;
+  testing::TempDir dir_;
+};
+
+std::unique_ptr<testing::TempDir> CliTat::shared_;
+
+TEST_F(CliTat, TrainingWritesACheckpointAndResumes) {
+  const nlohmann::json config = nlohmann::json::parse(read_file(shared("tat/config.json")));
+  EXPECT_EQ(config["format"], "nec-tat");
+  EXPECT_EQ(config["training_step"], 6);
+  EXPECT_TRUE(fs::exists(shared("tat/owo/config.json")));
+  EXPECT_TRUE(fs::exists(shared("tat/optimizer.pt")));
+
+  // Resume a copy to a later step: it starts at 6, not 0.
+  fs::copy(shared("tat"), path("tat"), fs::copy_options::recursive);
+  const CommandResult resumed = run_nec("train tat --config " + shared("tat.json") + " --data " + shared("cache") +
+                                        " --out " + path("tat") + " --resume --steps 8 --threads 1");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_TRUE(contains(resumed.output, "step 8/8")) << resumed.output;
+  EXPECT_FALSE(contains(resumed.output, "step 2/8")) << resumed.output;
+  EXPECT_EQ(nlohmann::json::parse(read_file(path("tat/config.json")))["training_step"], 8);
+
+  // A different model config cannot resume it.
+  const CommandResult mismatch = run_nec("train tat --config " + shared("tat.json") + " --kind nec-vq --data " +
+                                         shared("cache") + " --out " + path("tat") + " --resume --steps 9 --threads 1");
+  EXPECT_EQ(mismatch.exit_code, 1) << mismatch.output;
+  EXPECT_TRUE(contains(mismatch.output, "differs")) << mismatch.output;
+}
+
+TEST_F(CliTat, BaselinesTrainInTheSameLoop) {
+  for (const char* kind : {"nec-vq", "zero-pad-rvq"}) {
+    const CommandResult run = run_nec("train tat --config " + shared("tat.json") + " --kind " + kind + " --data " +
+                                      shared("cache") + " --owo " + shared("owo") + " --out " + path(kind) +
+                                      " --steps 2 --threads 1");
+    ASSERT_EQ(run.exit_code, 0) << kind << "\n" << run.output;
+    const nlohmann::json config = nlohmann::json::parse(read_file(path(std::string(kind) + "/config.json")));
+    EXPECT_EQ(config["tokenizer"]["kind"], kind);
+    if (std::string(kind) == "nec-vq") EXPECT_EQ(config["tokenizer"]["quantizer"]["layers"], 1);
+    if (std::string(kind) == "zero-pad-rvq") EXPECT_GT(config["tokenizer"]["max_joints"].get<int>(), 0);
+  }
+}
+
+TEST_F(CliTat, NonFiniteLossStopsTraining) {
+  const std::string config = dir_.write("nan.json", tat_config(1e30));
+  const CommandResult run = run_nec("train tat --config " + config + " --data " + shared("cache") + " --owo " +
+                                    shared("owo") + " --out " + path("nan") + " --steps 6 --threads 1");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_TRUE(contains(run.output, "training stopped at step")) << run.output;
+}
+
+TEST_F(CliTat, EncodeDecodeOntoAnotherSkeletonKeepsItsNamesAndChannels) {
+  const std::string source = zoo_clip("c000_biped");
+  const std::string target = zoo_clip("c001_quadruped");
+  ASSERT_FALSE(source.empty());
+  ASSERT_FALSE(target.empty());
+  const std::string tokens = path("walk.tokens.json");
+  const CommandResult encode = run_nec("encode " + source + " --model " + shared("tat") + " -o " + tokens + " --threads 1");
+  ASSERT_EQ(encode.exit_code, 0) << encode.output;
+  const tat::TokenFile file = tat::read_tokens(tokens);
+  const Clip source_clip = read_bvh(source);
+  EXPECT_EQ(file.frames, source_clip.motion.frame_count);  // the zoo is at 30 fps, like the model
+  EXPECT_EQ(file.steps(), (file.frames + 3) / 4);
+  EXPECT_EQ(file.layers, 2);
+  EXPECT_EQ(file.source_joints, source_clip.skeleton.joint_count());
+
+  const std::string out = path("dog_walk.bvh");
+  const CommandResult decode = run_nec("decode " + tokens + " --skeleton " + target + " --model " + shared("tat") +
+                                       " -o " + out + " --threads 1");
+  ASSERT_EQ(decode.exit_code, 0) << decode.output;
+  const Clip target_clip = read_bvh(target);
+  const Clip decoded = read_bvh(out);
+  EXPECT_EQ(decoded.motion.frame_count, file.frames);
+  ASSERT_EQ(decoded.skeleton.joint_count(), target_clip.skeleton.joint_count());
+  for (int j = 0; j < decoded.skeleton.joint_count(); ++j) {
+    EXPECT_EQ(decoded.skeleton.names[j], target_clip.skeleton.names[j]);
+    EXPECT_EQ(decoded.skeleton.channels[j].euler_order(), target_clip.skeleton.channels[j].euler_order());
+    if (j > 0) EXPECT_NEAR((decoded.skeleton.offsets[j] - target_clip.skeleton.offsets[j]).norm(), 0.0, 1e-4);
+  }
+
+  const std::string moved = path("dog_walk_transfer.bvh");
+  const CommandResult transfer = run_nec("transfer " + source + " --to " + target + " --model " + shared("tat") +
+                                         " -o " + moved + " --threads 1");
+  ASSERT_EQ(transfer.exit_code, 0) << transfer.output;
+  EXPECT_EQ(read_file(moved), read_file(out));  // transfer = encode + decode
+}
+
+TEST_F(CliTat, LongClipsAreEncodedInWindows) {
+  // A 2 s clip is 60 frames: with 16-frame windows and overlap 8 that is 7 windows.
+  const std::string source = zoo_clip("c002");
+  const std::string tokens = path("long.tokens.json");
+  const CommandResult encode = run_nec("encode " + source + " --model " + shared("tat") + " -o " + tokens +
+                                       " --window-overlap 8 --threads 1");
+  ASSERT_EQ(encode.exit_code, 0) << encode.output;
+  EXPECT_EQ(tat::read_tokens(tokens).steps(), 15);
+  const CommandResult bad_overlap = run_nec("encode " + source + " --model " + shared("tat") + " -o " + tokens +
+                                            " --window-overlap 6");
+  EXPECT_EQ(bad_overlap.exit_code, 2) << bad_overlap.output;
+}
+
+TEST_F(CliTat, EvalReconWritesATablePerDataset) {
+  const std::string json_path = path("recon.json");
+  const CommandResult run = run_nec("eval recon --data " + shared("cache") + " --models " + shared("tat") + " --json " +
+                                    json_path + " --threads 1");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_TRUE(contains(run.output, "| held |")) << run.output;
+  const nlohmann::json results = nlohmann::json::parse(read_file(json_path))["results"];
+  ASSERT_GE(results.size(), 2u);
+  for (const auto& row : results) {
+    EXPECT_GT(row["clips"].get<int>(), 0);
+    EXPECT_GT(row["mpjpe"].get<double>(), 0.0);  // an untrained-for-long model is not exact
+    EXPECT_LT(row["mpjpe"].get<double>(), 50.0);
+    EXPECT_GT(row["geodesic_degrees"].get<double>(), 0.0);
+    EXPECT_LE(row["geodesic_degrees"].get<double>(), 180.0);
+  }
+}
+
+TEST_F(CliTat, BadInputNamesTheFileAndWritesNothing) {
+  const std::string source = zoo_clip("c000_biped");
+  // Missing model.
+  CommandResult run = run_nec("encode " + source + " --model " + path("nowhere") + " -o " + path("t.json"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_TRUE(contains(run.output, "nowhere")) << run.output;
+  EXPECT_FALSE(fs::exists(path("t.json")));
+  // A model directory of another kind.
+  run = run_nec("encode " + source + " --model " + shared("owo") + " -o " + path("t.json"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_TRUE(contains(run.output, "not a TAT checkpoint")) << run.output;
+  // Malformed BVH: file and line.
+  const std::string broken = dir_.write("broken.bvh", "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 zz\n}\n");
+  run = run_nec("encode " + broken + " --model " + shared("tat") + " -o " + path("t.json"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_TRUE(contains(run.output, "broken.bvh:4")) << run.output;
+  EXPECT_FALSE(fs::exists(path("t.json")));
+  // Token file with a code outside the codebook.
+  ASSERT_EQ(run_nec("encode " + source + " --model " + shared("tat") + " -o " + path("good.json")).exit_code, 0);
+  std::string text = read_file(path("good.json"));
+  const size_t at = text.find("\"tokens\": [\n  [") + 15;
+  text.replace(at, text.find(',', at) - at, "999");
+  write_file_atomic(path("bad.json"), text);
+  run = run_nec("decode " + path("bad.json") + " --skeleton " + source + " --model " + shared("tat") + " -o " +
+                path("out.bvh"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_TRUE(contains(run.output, "bad.json")) << run.output;
+  EXPECT_TRUE(contains(run.output, "999")) << run.output;
+  EXPECT_FALSE(fs::exists(path("out.bvh")));
+  // Not a token file at all.
+  run = run_nec("decode " + source + " --skeleton " + source + " --model " + shared("tat") + " -o " + path("out.bvh"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_FALSE(fs::exists(path("out.bvh")));
+}
+
+}  // namespace
+}  // namespace nec

@@ -1,0 +1,214 @@
+// `nec train` and `nec eval` as a user runs them: a tiny OwO run on a small
+// zoo cache writes checkpoints, resumes where it stopped (taking the same
+// steps as a run that never stopped), stops on NaN with a message, refuses bad
+// configs and inputs naming the problem, and evaluates on held-out skeletons.
+#include "nec/motion/files.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace nec {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult run_nec(const std::string& arguments) {
+  const std::string command = std::string(NEC_BINARY_DIR) + "/apps/nec " + arguments + " 2>&1";
+  CommandResult run;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return run;
+  std::array<char, 4096> buffer{};
+  size_t n = 0;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// The last line of `output` that starts with `prefix`.
+std::string last_line_starting(const std::string& output, const std::string& prefix) {
+  std::string found;
+  size_t start = 0;
+  while (start < output.size()) {
+    size_t end = output.find('\n', start);
+    if (end == std::string::npos) end = output.size();
+    const std::string line = output.substr(start, end - start);
+    if (line.rfind(prefix, 0) == 0) found = line;
+    start = end + 1;
+  }
+  return found;
+}
+
+// A tiny model that takes a step in milliseconds; one line per step. The
+// learning rate is constant after warm-up, so a run to step 4 resumed to step 7
+// takes the steps of a run to step 7.
+std::string tiny_config(const std::string& optimizer = R"({"lr": 0.003, "warmup_steps": 2, "final_lr_fraction": 1})") {
+  return R"({
+  "encoder": {"name_dim": 0, "dim": 16, "layers": 1, "heads": 2, "edge_dim": 8},
+  "pretrain": {"pairs_per_skeleton": 16},
+  "optimizer": )" + optimizer + R"(,
+  "data": {"held_out": ["spider"], "poses_per_skeleton": 4},
+  "names": false,
+  "batch_size": 4,
+  "steps": 4,
+  "log_every": 1,
+  "validate_every": 4,
+  "checkpoint_every": 2,
+  "seed": 3
+})";
+}
+
+class CliTrain : public ::testing::Test {
+ protected:
+  // One zoo cache for every test: 9 creatures, one per plan, the spider held out.
+  static void SetUpTestSuite() {
+    shared_ = std::make_unique<testing::TempDir>();
+    const testing::TempDir& d = *shared_;
+    const CommandResult zoo = run_nec("zoo --out " + d / "zoo" + " --creatures 9 --clips-per-creature 1 --seconds 1 "
+                                      "--seed 2 --hold-out spider --quiet");
+    ASSERT_EQ(zoo.exit_code, 0) << zoo.output;
+    const CommandResult prepare = run_nec("prepare zoo=" + d / "zoo/seen" + " held=" + d / "zoo/held_out" +
+                                          " --hold-out-dataset held -o " + d / "cache" + " --quiet");
+    ASSERT_EQ(prepare.exit_code, 0) << prepare.output;
+  }
+  static void TearDownTestSuite() { shared_.reset(); }
+
+  static std::string cache() { return *shared_ / "cache"; }
+  std::string path(const std::string& name) const { return dir_ / name; }
+  std::string write(const std::string& name, const std::string& text) const { return dir_.write(name, text); }
+  std::string train(const std::string& config, const std::string& out, const std::string& extra = "") const {
+    return "train owo --config " + config + " --data " + cache() + " --out " + out + " --threads 1 " + extra;
+  }
+
+  static std::unique_ptr<testing::TempDir> shared_;
+  testing::TempDir dir_;
+};
+
+std::unique_ptr<testing::TempDir> CliTrain::shared_;
+
+TEST_F(CliTrain, DispatchByModel) {
+  const CommandResult overview = run_nec("train");
+  EXPECT_EQ(overview.exit_code, 2);
+  EXPECT_TRUE(contains(overview.output, "owo")) << overview.output;
+  const CommandResult unknown = run_nec("train gpt");
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_TRUE(contains(unknown.output, "unknown model 'gpt' (known: owo")) << unknown.output;
+  const CommandResult help = run_nec("train owo --help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_TRUE(contains(help.output, "--threads N") && contains(help.output, "(default: cpu)")) << help.output;
+  const CommandResult eval = run_nec("eval frob");
+  EXPECT_EQ(eval.exit_code, 2);
+  EXPECT_TRUE(contains(eval.output, "unknown evaluation 'frob' (known: owo")) << eval.output;
+}
+
+TEST_F(CliTrain, CheckpointsResumeAndEvaluate) {
+  const std::string config = write("tiny.json", tiny_config());
+  const std::string out = path("runs/owo");
+  const CommandResult first = run_nec(train(config, out, "--no-names"));
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_TRUE(contains(first.output, "step 4/4")) << first.output;
+  EXPECT_TRUE(contains(first.output, "checkpoint at step 2: " + out)) << first.output;
+  EXPECT_TRUE(contains(first.output, "checkpoint at step 4: " + out)) << first.output;
+  EXPECT_TRUE(contains(first.output, "validation at step 4: held_out_lca_acc")) << first.output;
+  for (const char* file : {"config.json", "tensors.pt", "training.json", "optimizer.pt"}) {
+    EXPECT_TRUE(fs::exists(fs::path(out) / file)) << file;
+  }
+  EXPECT_TRUE(contains(read_file(out + "/config.json"), "\"training_step\": 4"));
+
+  // Without --resume an existing checkpoint is never overwritten.
+  const CommandResult again = run_nec(train(config, out, "--no-names"));
+  EXPECT_EQ(again.exit_code, 1);
+  EXPECT_TRUE(contains(again.output, "already holds a checkpoint; pass --resume")) << again.output;
+
+  // Resume to step 7: the steps continue from 5, and match a run that never stopped.
+  const CommandResult resumed = run_nec(train(config, out, "--no-names --resume --steps 7"));
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_TRUE(contains(resumed.output, "resumed  " + out + " at step 4")) << resumed.output;
+  EXPECT_FALSE(contains(resumed.output, "step 4/7")) << resumed.output;
+  EXPECT_TRUE(contains(resumed.output, "step 5/7")) << resumed.output;
+  EXPECT_TRUE(contains(read_file(out + "/training.json"), "\"step\": 7"));
+  const CommandResult straight = run_nec(train(config, path("runs/straight"), "--no-names --steps 7"));
+  ASSERT_EQ(straight.exit_code, 0) << straight.output;
+  auto terms_of = [](const std::string& line) { return line.substr(line.find("total")); };
+  const std::string resumed_line = last_line_starting(resumed.output, "step 7/7");
+  const std::string straight_line = last_line_starting(straight.output, "step 7/7");
+  ASSERT_FALSE(resumed_line.empty()) << resumed.output;
+  EXPECT_EQ(terms_of(resumed_line), terms_of(straight_line));
+
+  // Resuming with another config names the field.
+  const std::string changed = write("changed.json", tiny_config(R"({"lr": 0.01, "warmup_steps": 2})"));
+  const CommandResult mismatch = run_nec(train(changed, out, "--no-names --resume --steps 9"));
+  EXPECT_EQ(mismatch.exit_code, 1);
+  EXPECT_TRUE(contains(mismatch.output, "cannot resume: the config differs in 'optimizer.lr'")) << mismatch.output;
+
+  // Held-out evaluation: a table, and JSON with every number.
+  const std::string json = path("eval.json");
+  const CommandResult eval = run_nec("eval owo --model " + out + " --data " + cache() + " --json " + json + " --threads 1");
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  EXPECT_TRUE(contains(eval.output, "| held out: spider | 1 |")) << eval.output;
+  EXPECT_TRUE(contains(eval.output, "| training skeletons | 8 |")) << eval.output;
+  const std::string written = read_file(json);
+  EXPECT_TRUE(contains(written, "\"rebuild_rate\"")) << written;
+  EXPECT_TRUE(contains(written, "\"offset_percent_of_diameter\"")) << written;
+}
+
+TEST_F(CliTrain, NonFiniteLossStopsWithTheStepAndExitOne) {
+  const std::string config = write("nan.json", tiny_config(R"({"lr": 1e30, "warmup_steps": 0, "grad_clip": 0})"));
+  const std::string out = path("runs/nan");
+  const CommandResult run = run_nec(train(config, out, "--no-names --steps 50"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_TRUE(contains(run.output, "nec: error: training stopped at step ")) << run.output;
+  EXPECT_TRUE(contains(run.output, "; try a lower learning rate")) << run.output;
+  EXPECT_TRUE(contains(run.output, "loss term '")) << run.output;
+}
+
+TEST_F(CliTrain, BadInputNamesTheProblemAndWritesNothing) {
+  const std::string out = path("runs/bad");
+  const std::string unknown = write("unknown.json", R"({"optimizer": {"learning_rate": 0.1}})");
+  CommandResult run = run_nec(train(unknown, out, "--no-names"));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.output, "unknown.json: field 'optimizer.learning_rate' is not a known field")) << run.output;
+
+  const std::string no_plan = write("no_plan.json", tiny_config());
+  run = run_nec("train owo --config " + no_plan + " --data " + path("no_cache") + " --out " + out + " --no-names");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.output, "no_cache")) << run.output;
+
+  const std::string dragons = write("dragons.json", R"({"names": false, "encoder": {"name_dim": 0},
+                                                       "data": {"held_out": ["dragonfly"]}})");
+  run = run_nec(train(dragons, out, "--no-names"));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.output, "hold-out pattern 'dragonfly' matches no skeleton")) << run.output;
+
+  // Names asked for, vectors missing: say how to get them, or to run without.
+  const std::string named = write("named.json", R"({"data": {"held_out": ["spider"]}})");
+  run = run_nec(train(named, out, "--glove " + path("absent.bin")));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.output, "nec text import-glove")) << run.output;
+  EXPECT_TRUE(contains(run.output, "--no-names")) << run.output;
+
+  run = run_nec(train(no_plan, out, "--no-names --resume"));
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.output, "no checkpoint to resume")) << run.output;
+  EXPECT_FALSE(fs::exists(out));
+
+  run = run_nec("eval owo --model " + path("runs/none") + " --data " + cache());
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_TRUE(contains(run.output, "runs/none")) << run.output;
+}
+
+}  // namespace
+}  // namespace nec

@@ -1,0 +1,192 @@
+// Tokenizer reconstruction loss: zero at the target, each term on its own channels, masks.
+#include "nec/motion/features.h"
+#include "nec/tat/loss.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+namespace nec {
+namespace {
+
+using tat::BatchTensors;
+using tat::LossWeights;
+using tat::ReconstructionLoss;
+
+// Zero-padded batch of the clips' Θ, masks, parents and offsets, as the loader makes it.
+BatchTensors make_batch(const std::vector<Skeleton>& skeletons, const std::vector<Motion>& motions) {
+  const int64_t b = static_cast<int64_t>(skeletons.size());
+  int64_t t = 0, j = 0;
+  for (size_t i = 0; i < skeletons.size(); ++i) {
+    t = std::max<int64_t>(t, motions[i].frame_count);
+    j = std::max<int64_t>(j, skeletons[i].joint_count());
+  }
+  BatchTensors x;
+  x.features = torch::zeros({b, t, j, 9});
+  x.joint_mask = torch::zeros({b, j}, torch::kBool);
+  x.frame_mask = torch::zeros({b, t}, torch::kBool);
+  x.parents = torch::full({b, j}, -1, torch::kLong);
+  x.offsets = torch::zeros({b, j, 3});
+  for (int64_t i = 0; i < b; ++i) {
+    const Skeleton& s = skeletons[i];
+    const Features f = encode_features(s, motions[i]);
+    const int64_t joints = s.joint_count(), frames = f.frame_count;
+    x.features[i].narrow(0, 0, frames).narrow(1, 0, joints).copy_(
+        torch::from_blob(const_cast<float*>(f.data.data()), {frames, joints, 9}, torch::kFloat32));
+    x.joint_mask[i].narrow(0, 0, joints).fill_(true);
+    x.frame_mask[i].narrow(0, 0, frames).fill_(true);
+    for (int64_t k = 0; k < joints; ++k) {
+      x.parents[i][k] = s.parents[k];
+      for (int c = 0; c < 3; ++c) x.offsets[i][k][c] = s.offsets[k][c];
+    }
+  }
+  return x;
+}
+
+struct Fixture {
+  std::vector<Skeleton> skeletons;
+  BatchTensors batch;
+};
+
+// Two clips: 6 joints x 12 frames and 10 joints x 9 frames (padding in both directions).
+Fixture two_clips() {
+  std::mt19937 rng(11);
+  Fixture f;
+  std::vector<Motion> motions;
+  for (auto [joints, frames] : std::vector<std::pair<int, int>>{{6, 12}, {10, 9}}) {
+    f.skeletons.push_back(testing::random_skeleton(rng, joints));
+    motions.push_back(testing::random_motion(rng, f.skeletons.back(), frames));
+  }
+  f.batch = make_batch(f.skeletons, motions);
+  return f;
+}
+
+ReconstructionLoss loss_of(const at::Tensor& prediction, const BatchTensors& target, double commitment = 0.0) {
+  return tat::reconstruction_loss(prediction, target, torch::full({}, commitment), LossWeights{});
+}
+
+// A joint with children and a leaf of a skeleton, other than the root.
+std::pair<int, int> inner_joint_and_leaf(const Skeleton& s) {
+  int inner = -1;
+  for (int j = 1; j < s.joint_count() && inner < 0; ++j) {
+    if (!s.children(j).empty()) inner = j;
+  }
+  const std::vector<int> leaves = s.leaves();
+  return {inner, leaves.back()};
+}
+
+TEST(TatLoss, WeightsValidation) {
+  EXPECT_NO_THROW(LossWeights{}.validate());
+  LossWeights w;
+  w.velocity = -0.1;
+  try {
+    w.validate();
+    ADD_FAILURE() << "accepted a negative weight";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("velocity"), std::string::npos) << e.what();
+  }
+  w = {};
+  w.position = std::nan("");
+  EXPECT_THROW(w.validate(), std::invalid_argument);
+}
+
+TEST(TatLoss, ZeroAtTheTarget) {
+  const Fixture f = two_clips();
+  const ReconstructionLoss l = loss_of(f.batch.features.clone(), f.batch);
+  EXPECT_EQ(l.total.item<double>(), 0.0);
+  EXPECT_EQ(l.rotation, 0.0);
+  EXPECT_EQ(l.root, 0.0);
+  EXPECT_EQ(l.position, 0.0);
+  EXPECT_EQ(l.velocity, 0.0);
+  EXPECT_EQ(l.commitment, 0.0);
+  // The commitment loss is added as it is.
+  const ReconstructionLoss with_commitment = loss_of(f.batch.features.clone(), f.batch, 0.125);
+  EXPECT_DOUBLE_EQ(with_commitment.total.item<double>(), 0.125);
+  EXPECT_DOUBLE_EQ(with_commitment.commitment, 0.125);
+}
+
+TEST(TatLoss, EachTermRespondsToItsOwnChannels) {
+  const Fixture f = two_clips();
+  const auto [inner, leaf] = inner_joint_and_leaf(f.skeletons[0]);
+  ASSERT_GT(inner, 0);
+  const int frame = 5;
+
+  // An inner joint's rotation at one frame: rotation, positions and velocities, not the root.
+  at::Tensor p = f.batch.features.clone();
+  p[0][frame][inner].narrow(0, 3, 6).add_(0.3);
+  ReconstructionLoss l = loss_of(p, f.batch);
+  EXPECT_GT(l.rotation, 0.0);
+  EXPECT_EQ(l.root, 0.0);
+  EXPECT_GT(l.position, 0.0);
+  EXPECT_GT(l.velocity, 0.0);
+
+  // A leaf's rotation moves no joint position.
+  p = f.batch.features.clone();
+  p[0][frame][leaf].narrow(0, 3, 6).add_(0.3);
+  l = loss_of(p, f.batch);
+  EXPECT_GT(l.rotation, 0.0);
+  EXPECT_EQ(l.root, 0.0);
+  EXPECT_LT(l.position, 1e-7);
+  EXPECT_LT(l.velocity, 1e-7);
+
+  // The root displacement: root, positions (all later frames) and velocity, not rotations.
+  p = f.batch.features.clone();
+  p[0][frame][0].narrow(0, 0, 3).add_(0.2);
+  l = loss_of(p, f.batch);
+  EXPECT_EQ(l.rotation, 0.0);
+  EXPECT_GT(l.root, 0.0);
+  EXPECT_GT(l.position, 0.0);
+  EXPECT_GT(l.velocity, 0.0);
+  // 0.2 on each of 3 channels at one of 12 + 9 real frames.
+  EXPECT_NEAR(l.root, 0.2 / 21.0, 1e-6);
+
+  // Translation channels of a non-root joint are not part of Θ: nothing.
+  p = f.batch.features.clone();
+  p[0][frame][inner].narrow(0, 0, 3).add_(0.5);
+  l = loss_of(p, f.batch);
+  EXPECT_EQ(l.total.item<double>(), 0.0);
+}
+
+TEST(TatLoss, PaddingIsExcluded) {
+  const Fixture f = two_clips();
+  at::Tensor p = f.batch.features.clone();
+  p[0].narrow(1, 6, 4).normal_(0.0, 5.0);  // item 0 has 6 of 10 joints
+  p[1].narrow(0, 9, 3).normal_(0.0, 5.0);  // item 1 has 9 of 12 frames
+  p.requires_grad_(true);
+  const ReconstructionLoss l = loss_of(p, f.batch);
+  EXPECT_EQ(l.total.item<double>(), 0.0);
+  EXPECT_EQ(l.position, 0.0);
+  EXPECT_EQ(l.velocity, 0.0);
+
+  // Gradients reach real entries only.
+  at::Tensor q = f.batch.features.clone();
+  q.add_(0.1 * torch::randn_like(q));
+  q.requires_grad_(true);
+  loss_of(q, f.batch).total.backward();
+  const at::Tensor grad = q.grad();
+  EXPECT_GT(grad.abs().sum().item<double>(), 0.0);
+  EXPECT_EQ(grad[0].narrow(1, 6, 4).abs().sum().item<double>(), 0.0);
+  EXPECT_EQ(grad[1].narrow(0, 9, 3).abs().sum().item<double>(), 0.0);
+  EXPECT_TRUE(torch::isfinite(grad).all().item<bool>());
+}
+
+TEST(TatLoss, WeightsScaleTheirTerms) {
+  const Fixture f = two_clips();
+  at::Tensor p = f.batch.features.clone();
+  p.add_(0.05 * torch::randn_like(p));
+  LossWeights w;
+  w.rotation = 2.0;
+  w.root = 0.0;
+  w.position = 3.0;
+  w.velocity = 0.25;
+  const ReconstructionLoss l = tat::reconstruction_loss(p, f.batch, torch::full({}, 0.5), w);
+  EXPECT_NEAR(l.total.item<double>(), 2.0 * l.rotation + 3.0 * l.position + 0.25 * l.velocity + 0.5, 1e-5);
+  EXPECT_THROW(tat::reconstruction_loss(p.narrow(1, 0, 4), f.batch, {}, w), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace nec

@@ -1,0 +1,351 @@
+// TAT tokenizer: config, shapes of every kind, masking invariance, codes round
+// trip, parameter budget, and learning on procedural zoo clips.
+#include "nec/motion/features.h"
+#include "nec/motion/preprocess.h"
+#include "nec/tat/loss.h"
+#include "nec/tat/tokenizer.h"
+#include "nec/zoo/creature.h"
+#include "nec/zoo/motion_synthesis.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace nec {
+namespace {
+
+using tat::BatchTensors;
+using tat::TatConfig;
+using tat::TokenizerKind;
+using tat::TokenizerOutput;
+
+constexpr TokenizerKind kAllKinds[] = {TokenizerKind::NecRvq, TokenizerKind::NecVq, TokenizerKind::ZeroPadRvq};
+
+// Zero-padded batch of the clips' Θ, masks, parents and offsets, as the loader makes it.
+BatchTensors make_batch(const std::vector<Skeleton>& skeletons, const std::vector<Motion>& motions) {
+  const int64_t b = static_cast<int64_t>(skeletons.size());
+  int64_t t = 0, j = 0;
+  for (size_t i = 0; i < skeletons.size(); ++i) {
+    t = std::max<int64_t>(t, motions[i].frame_count);
+    j = std::max<int64_t>(j, skeletons[i].joint_count());
+  }
+  BatchTensors x;
+  x.features = torch::zeros({b, t, j, 9});
+  x.joint_mask = torch::zeros({b, j}, torch::kBool);
+  x.frame_mask = torch::zeros({b, t}, torch::kBool);
+  x.parents = torch::full({b, j}, -1, torch::kLong);
+  x.offsets = torch::zeros({b, j, 3});
+  for (int64_t i = 0; i < b; ++i) {
+    const Skeleton& s = skeletons[i];
+    const Features f = encode_features(s, motions[i]);
+    const int64_t joints = s.joint_count(), frames = f.frame_count;
+    x.features[i].narrow(0, 0, frames).narrow(1, 0, joints).copy_(
+        torch::from_blob(const_cast<float*>(f.data.data()), {frames, joints, 9}, torch::kFloat32));
+    x.joint_mask[i].narrow(0, 0, joints).fill_(true);
+    x.frame_mask[i].narrow(0, 0, frames).fill_(true);
+    for (int64_t k = 0; k < joints; ++k) {
+      x.parents[i][k] = s.parents[k];
+      for (int c = 0; c < 3; ++c) x.offsets[i][k][c] = s.offsets[k][c];
+    }
+  }
+  return x;
+}
+
+TatConfig small_config(TokenizerKind kind) {
+  TatConfig config;
+  config.kind = kind;
+  config.joint_embedding_dim = 16;
+  config.dim = 32;
+  config.blocks = 2;
+  config.attention_layers = 1;
+  config.heads = 4;
+  config.max_joints = 24;
+  config.quantizer.layers = kind == TokenizerKind::NecVq ? 1 : 2;
+  config.quantizer.codebook_size = 64;
+  config.quantizer.code_dim = 32;
+  return config;
+}
+
+int64_t parameter_count(torch::nn::Module& module) {
+  int64_t count = 0;
+  for (const at::Tensor& p : module.parameters()) count += p.numel();
+  return count;
+}
+
+// Random clips on random skeletons of the given joint counts, T frames each.
+struct RandomBatch {
+  std::vector<Skeleton> skeletons;
+  BatchTensors batch;
+  at::Tensor embeddings;  // (B, J, 16)
+};
+
+RandomBatch random_batch(std::mt19937& rng, const std::vector<int>& joint_counts, int frames) {
+  RandomBatch out;
+  std::vector<Motion> motions;
+  for (int joints : joint_counts) {
+    out.skeletons.push_back(testing::random_skeleton(rng, joints));
+    motions.push_back(testing::random_motion(rng, out.skeletons.back(), frames));
+  }
+  out.batch = make_batch(out.skeletons, motions);
+  out.embeddings = torch::randn({out.batch.features.size(0), out.batch.features.size(2), 16}) *
+                   out.batch.joint_mask.unsqueeze(-1);
+  return out;
+}
+
+TEST(TatTokenizer, KindNamesRoundTrip) {
+  for (TokenizerKind kind : kAllKinds) EXPECT_EQ(tat::tokenizer_kind_from_string(tat::to_string(kind)), kind);
+  EXPECT_EQ(tat::to_string(TokenizerKind::ZeroPadRvq), "zero-pad-rvq");
+  EXPECT_THROW(tat::tokenizer_kind_from_string("nec"), std::invalid_argument);
+}
+
+TEST(TatTokenizer, ConfigValidation) {
+  for (TokenizerKind kind : kAllKinds) EXPECT_NO_THROW(small_config(kind).validate());
+  auto expect_bad = [](const TatConfig& config, const std::string& field) {
+    try {
+      config.validate();
+      ADD_FAILURE() << "accepted a bad " << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  TatConfig c = small_config(TokenizerKind::NecVq);
+  c.quantizer.layers = 2;
+  expect_bad(c, "quantizer.layers");
+  c = small_config(TokenizerKind::ZeroPadRvq);
+  c.max_joints = 0;
+  expect_bad(c, "max_joints");
+  c = small_config(TokenizerKind::NecRvq);
+  c.heads = 5;
+  expect_bad(c, "heads");
+  c = small_config(TokenizerKind::NecRvq);
+  c.blocks = 0;
+  expect_bad(c, "blocks");
+  c = small_config(TokenizerKind::NecRvq);
+  c.quantizer.codebook_size = 0;
+  expect_bad(c, "codebook_size");
+  EXPECT_NE(small_config(TokenizerKind::NecRvq).to_string().find("kind=nec-rvq"), std::string::npos);
+}
+
+TEST(TatTokenizer, ShapesOfEveryKind) {
+  torch::manual_seed(0);
+  std::mt19937 rng(1);
+  const RandomBatch x = random_batch(rng, {7, 4}, 16);
+  for (TokenizerKind kind : kAllKinds) {
+    const TatConfig config = small_config(kind);
+    tat::Tokenizer model(config);
+    const at::Tensor embeddings = kind == TokenizerKind::ZeroPadRvq ? at::Tensor() : x.embeddings;
+    const TokenizerOutput out = model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, embeddings);
+    const int64_t layers = config.quantizer.layers;
+    EXPECT_EQ(out.reconstruction.sizes(), (std::vector<int64_t>{2, 16, 7, 9})) << tat::to_string(kind);
+    EXPECT_EQ(out.codes.sizes(), (std::vector<int64_t>{2, 4, layers}));
+    EXPECT_EQ(out.codes.scalar_type(), torch::kLong);
+    EXPECT_EQ(out.commitment_loss.dim(), 0);
+    EXPECT_EQ(out.perplexity.sizes(), (std::vector<int64_t>{layers}));
+    EXPECT_TRUE(torch::isfinite(out.reconstruction).all().item<bool>());
+    // Padded joints are zero.
+    EXPECT_EQ(out.reconstruction[1].narrow(1, 4, 3).abs().sum().item<double>(), 0.0);
+
+    const at::Tensor latent = model->encode(x.batch.features, x.batch.joint_mask, embeddings);
+    EXPECT_EQ(latent.sizes(), (std::vector<int64_t>{2, 4, config.quantizer.code_dim}));
+    // T not a multiple of r = 4.
+    try {
+      model->encode(x.batch.features.narrow(1, 0, 14), x.batch.joint_mask, embeddings);
+      ADD_FAILURE() << "accepted T = 14";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("multiple"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(TatTokenizer, ZeroPadRejectsTooManyJoints) {
+  tat::Tokenizer model(small_config(TokenizerKind::ZeroPadRvq));
+  std::mt19937 rng(2);
+  const RandomBatch x = random_batch(rng, {30}, 8);
+  try {
+    model->encode(x.batch.features, x.batch.joint_mask, {});
+    ADD_FAILURE() << "accepted 30 joints with max_joints 24";
+  } catch (const std::invalid_argument& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("30"), std::string::npos) << message;
+    EXPECT_NE(message.find("24"), std::string::npos) << message;
+  }
+}
+
+TEST(TatTokenizer, NecNeedsJointEmbeddings) {
+  tat::Tokenizer model(small_config(TokenizerKind::NecRvq));
+  std::mt19937 rng(3);
+  const RandomBatch x = random_batch(rng, {5}, 8);
+  EXPECT_THROW(model->encode(x.batch.features, x.batch.joint_mask, {}), std::invalid_argument);
+  EXPECT_THROW(model->encode(x.batch.features, x.batch.joint_mask, torch::zeros({1, 5, 8})), std::invalid_argument);
+}
+
+// A skeleton's reconstruction must not depend on what it is batched with, nor
+// on the content of padded joints.
+TEST(TatTokenizer, MaskingInvariance) {
+  torch::manual_seed(4);
+  std::mt19937 rng(4);
+  const RandomBatch pair = random_batch(rng, {5, 11}, 16);
+  for (TokenizerKind kind : kAllKinds) {
+    tat::Tokenizer model(small_config(kind));
+    // Seed the codebooks with a training step, then evaluate.
+    const bool nec = kind != TokenizerKind::ZeroPadRvq;
+    model->forward(pair.batch.features, pair.batch.joint_mask, pair.batch.frame_mask,
+                   nec ? pair.embeddings : at::Tensor());
+    model->eval();
+    torch::NoGradGuard no_grad;
+
+    const at::Tensor alone_features = pair.batch.features.narrow(0, 0, 1).narrow(2, 0, 5).contiguous();
+    const at::Tensor alone_mask = pair.batch.joint_mask.narrow(0, 0, 1).narrow(1, 0, 5).contiguous();
+    const at::Tensor alone_embeddings = nec ? pair.embeddings.narrow(0, 0, 1).narrow(1, 0, 5).contiguous() : at::Tensor();
+    const TokenizerOutput alone =
+        model->forward(alone_features, alone_mask, pair.batch.frame_mask.narrow(0, 0, 1), alone_embeddings);
+
+    // Garbage in item 0's padded joints (features and embeddings).
+    at::Tensor features = pair.batch.features.clone();
+    features[0].narrow(1, 5, 6).normal_(0.0, 3.0);
+    at::Tensor embeddings = nec ? pair.embeddings.clone() : at::Tensor();
+    if (nec) embeddings[0].narrow(0, 5, 6).normal_(0.0, 3.0);
+    const TokenizerOutput batched = model->forward(features, pair.batch.joint_mask, pair.batch.frame_mask, embeddings);
+
+    const double difference =
+        (batched.reconstruction[0].narrow(1, 0, 5) - alone.reconstruction[0]).abs().max().item<double>();
+    std::printf("%s: max difference alone vs batched with padding garbage %.3g\n", tat::to_string(kind).c_str(),
+                difference);
+    EXPECT_LT(difference, 1e-5) << tat::to_string(kind);
+    // Codes may differ between equal codebook entries (seeding draws rows with replacement): compare their vectors.
+    const double latent_difference =
+        (model->codes_to_latent(batched.codes.narrow(0, 0, 1)) - model->codes_to_latent(alone.codes)).abs().max().item<double>();
+    EXPECT_LT(latent_difference, 1e-6) << tat::to_string(kind);
+  }
+}
+
+TEST(TatTokenizer, DecodingTheCodesGivesTheReconstruction) {
+  torch::manual_seed(5);
+  std::mt19937 rng(5);
+  const RandomBatch x = random_batch(rng, {6, 9}, 16);
+  for (TokenizerKind kind : kAllKinds) {
+    tat::Tokenizer model(small_config(kind));
+    const at::Tensor embeddings = kind == TokenizerKind::ZeroPadRvq ? at::Tensor() : x.embeddings;
+    model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, embeddings);
+    model->eval();
+    torch::NoGradGuard no_grad;
+    const TokenizerOutput out = model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, embeddings);
+    const at::Tensor latent = model->codes_to_latent(out.codes);
+    const at::Tensor decoded = model->decode(latent, x.batch.joint_mask, embeddings);
+    const double difference = (decoded - out.reconstruction).abs().max().item<double>();
+    EXPECT_LT(difference, 1e-5) << tat::to_string(kind);
+    // encode -> quantize gives the same codes.
+    const at::Tensor step_mask = x.batch.frame_mask.view({2, 4, 4}).any(-1);
+    const tat::QuantizerOutput q =
+        model->quantize(model->encode(x.batch.features, x.batch.joint_mask, embeddings), step_mask);
+    EXPECT_TRUE(torch::equal(q.codes, out.codes));
+    EXPECT_EQ(q.quantized.sizes(), latent.sizes());
+  }
+}
+
+TEST(TatTokenizer, EveryParameterGetsAGradient) {
+  torch::manual_seed(6);
+  std::mt19937 rng(6);
+  const RandomBatch x = random_batch(rng, {6, 9}, 16);
+  for (TokenizerKind kind : kAllKinds) {
+    tat::Tokenizer model(small_config(kind));
+    const at::Tensor embeddings = kind == TokenizerKind::ZeroPadRvq ? at::Tensor() : x.embeddings;
+    const TokenizerOutput out = model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, embeddings);
+    tat::reconstruction_loss(out.reconstruction, x.batch, out.commitment_loss, {}).total.backward();
+    for (const auto& p : model->named_parameters()) {
+      ASSERT_TRUE(p.value().grad().defined()) << tat::to_string(kind) << " " << p.key();
+      EXPECT_GT(p.value().grad().abs().sum().item<double>(), 0.0) << tat::to_string(kind) << " " << p.key();
+    }
+  }
+}
+
+TEST(TatTokenizer, ParameterBudgetsAreComparable) {
+  TatConfig config;  // dim 128, code_dim 128, K 256, R 4, blocks 2, attention_layers 1, joint_embedding_dim 128
+  config.max_joints = 64;
+  config.kind = TokenizerKind::NecRvq;
+  tat::Tokenizer nec(config);
+  config.kind = TokenizerKind::ZeroPadRvq;
+  tat::Tokenizer padded(config);
+  const int64_t nec_count = parameter_count(*nec), padded_count = parameter_count(*padded);
+  std::printf("parameters: nec-rvq %lld, zero-pad-rvq %lld (max_joints 64)\n", static_cast<long long>(nec_count),
+              static_cast<long long>(padded_count));
+  const double ratio = static_cast<double>(nec_count) / static_cast<double>(padded_count);
+  EXPECT_GT(ratio, 0.75);
+  EXPECT_LT(ratio, 1.33);
+}
+
+// Eight zoo clips of different body plans, preprocessed, 32 frames each.
+struct ZooBatch {
+  BatchTensors batch;
+  at::Tensor embeddings;  // (B, J, 16), fixed random joint identities
+};
+
+constexpr int kZooFrames = 16;
+
+ZooBatch zoo_batch() {
+  const zoo::BodyPlan plans[] = {zoo::BodyPlan::Biped, zoo::BodyPlan::Quadruped, zoo::BodyPlan::Hexapod,
+                                 zoo::BodyPlan::Spider, zoo::BodyPlan::Snake,    zoo::BodyPlan::Bird,
+                                 zoo::BodyPlan::Fish,  zoo::BodyPlan::Biped};
+  std::vector<Skeleton> skeletons;
+  std::vector<Motion> motions;
+  for (size_t i = 0; i < std::size(plans); ++i) {
+    const zoo::Creature creature = zoo::make_creature(plans[i], 100 + i);
+    const std::vector<zoo::Action> actions = zoo::supported_actions(plans[i]);
+    zoo::MotionSpec spec;
+    spec.action = actions[(i * 3 + 1) % actions.size()];
+    spec.seconds = 1.2;
+    spec.seed = i;
+    const zoo::SynthesizedMotion motion = zoo::synthesize_motion(creature, spec);
+    const PreparedClip prepared = preprocess(Clip{creature.skeleton, motion.motion, {}}, "zoo");
+    EXPECT_TRUE(prepared.report.accepted()) << prepared.report.rejection;
+    skeletons.push_back(prepared.clip.skeleton);
+    motions.push_back(prepared.clip.motion.slice(0, kZooFrames));
+  }
+  ZooBatch out;
+  out.batch = make_batch(skeletons, motions);
+  out.embeddings = torch::randn({out.batch.features.size(0), out.batch.features.size(2), 16});
+  return out;
+}
+
+TEST(TatTokenizer, LearnsToReconstructZooClips) {
+  torch::set_num_threads(1);
+  torch::manual_seed(7);
+  const ZooBatch x = zoo_batch();
+  std::printf("zoo batch: %lld clips, %lld frames, up to %lld joints\n", static_cast<long long>(x.batch.features.size(0)),
+              static_cast<long long>(x.batch.features.size(1)), static_cast<long long>(x.batch.features.size(2)));
+  tat::Tokenizer model(small_config(TokenizerKind::NecRvq));
+  torch::optim::Adam optimizer(model->parameters(), torch::optim::AdamOptions(3e-3));
+  auto evaluate = [&] {
+    torch::NoGradGuard no_grad;
+    model->eval();
+    const TokenizerOutput out = model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, x.embeddings);
+    const tat::ReconstructionLoss l = tat::reconstruction_loss(out.reconstruction, x.batch, out.commitment_loss, {});
+    model->train();
+    return l.total.item<double>() - l.commitment;
+  };
+  const auto start = std::chrono::steady_clock::now();
+  model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, x.embeddings);  // seeds the codebooks
+  const double initial = evaluate();
+  const int steps = 80;
+  for (int step = 0; step < steps; ++step) {
+    const TokenizerOutput out = model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, x.embeddings);
+    const tat::ReconstructionLoss l = tat::reconstruction_loss(out.reconstruction, x.batch, out.commitment_loss, {});
+    optimizer.zero_grad();
+    l.total.backward();
+    optimizer.step();
+  }
+  const double final_loss = evaluate();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("reconstruction loss (eval): %.4f -> %.4f (x%.3f) after %d Adam steps in %.1f s\n", initial, final_loss,
+              final_loss / initial, steps, seconds);
+  EXPECT_LT(final_loss, 0.5 * initial);
+}
+
+}  // namespace
+}  // namespace nec
