@@ -69,7 +69,7 @@ int run_train_owo(int argc, char** argv) {
   cli.option("--data", "CACHES", "", "dataset caches from `nec prepare`, comma-separated", true);
   cli.option("--out", "CKPT", "", "checkpoint directory (replaced atomically at every checkpoint)", true);
   cli.flag("--resume", "continue the run whose checkpoint is in --out (same config; steps may grow)");
-  cli.option("--steps", "N", "", "the step training ends at (default: the config's steps)");
+  cli.option("--steps", "N", "", "the step training ends at, instead of the config's steps");
   cli.option("--threads", "N", "0", "torch threads; 0 = all cores");
   cli.option("--device", "DEVICE", "cpu", "cpu, cuda or cuda:N");
   cli.option("--glove", "FILE", text::default_word_vectors_path(), "word vectors for joint names (`nec text import-glove`)");

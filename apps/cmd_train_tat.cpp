@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <thread>
@@ -155,6 +156,7 @@ int run_train_tat(int argc, char** argv) {
                return n;
              }(),
              data_text, config.steps, config.batch_size, config.window_frames, device.str());
+  std::fflush(stdout);
 
   TrainingSchedule schedule;
   schedule.total_steps = config.steps;

@@ -7,8 +7,6 @@
 
 #include <gtest/gtest.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -18,23 +16,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
-
-CommandResult run_nec(const std::string& arguments) {
-  const std::string command = std::string(NEC_BINARY_DIR) + "/apps/nec " + arguments + " 2>&1";
-  CommandResult run;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return run;
-  std::array<char, 4096> buffer{};
-  size_t n = 0;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
-}
+using testing::CommandResult;
+using testing::run_nec;
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
@@ -149,7 +132,7 @@ TEST_F(CliTrain, CheckpointsResumeAndEvaluate) {
   EXPECT_EQ(terms_of(resumed_line), terms_of(straight_line));
 
   // Resuming with another config names the field.
-  const std::string changed = write("changed.json", tiny_config(R"({"lr": 0.01, "warmup_steps": 2})"));
+  const std::string changed = write("changed.json", tiny_config(R"({"lr": 0.01, "warmup_steps": 2, "final_lr_fraction": 1})"));
   const CommandResult mismatch = run_nec(train(changed, out, "--no-names --resume --steps 9"));
   EXPECT_EQ(mismatch.exit_code, 1);
   EXPECT_TRUE(contains(mismatch.output, "cannot resume: the config differs in 'optimizer.lr'")) << mismatch.output;
@@ -199,6 +182,10 @@ TEST_F(CliTrain, BadInputNamesTheProblemAndWritesNothing) {
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_TRUE(contains(run.output, "nec text import-glove")) << run.output;
   EXPECT_TRUE(contains(run.output, "--no-names")) << run.output;
+
+  run = run_nec(train(no_plan, out, "--no-names --device tpu"));
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_TRUE(contains(run.output, "unknown device 'tpu' (known: cpu, cuda, cuda:N)")) << run.output;
 
   run = run_nec(train(no_plan, out, "--no-names --resume"));
   EXPECT_EQ(run.exit_code, 1);

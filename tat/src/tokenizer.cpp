@@ -179,6 +179,8 @@ class NecEncoderImpl : public detail::EncoderImpl {
       }
     }
     attention_layers_ = config.attention_layers;
+    // Pre-norm layers leave the residual stream unnormalized: normalize it before the quantizer.
+    final_norm_ = register_module("final_norm", torch::nn::LayerNorm(torch::nn::LayerNormOptions({d})));
     to_latent_ = register_module("to_latent", torch::nn::Linear(d, config.quantizer.code_dim));
   }
 
@@ -197,12 +199,13 @@ class NecEncoderImpl : public detail::EncoderImpl {
         tokens = spatial_->ptr<SpatialAttentionImpl>(block * attention_layers_ + layer)->forward(tokens, bias, last);
       }
     }
-    return to_latent_(tokens.select(2, 0));  // the virtual joint, (B, T / r, C)
+    return to_latent_(final_norm_(tokens.select(2, 0)));  // the virtual joint, (B, T / r, C)
   }
 
  private:
   int64_t attention_layers_ = 1;
   torch::nn::Sequential input_{nullptr};
+  torch::nn::LayerNorm final_norm_{nullptr};
   torch::nn::Linear embedding_{nullptr}, to_latent_{nullptr};
   at::Tensor virtual_joint_;  // (D)
   torch::nn::ModuleList temporal_{nullptr}, spatial_{nullptr};
