@@ -1,0 +1,334 @@
+// Cost of the tokenizer (TAT) on the CPU: one training step, whole-clip
+// encode / decode throughput, and the peak memory of a step.
+//
+//   bench_tat [--configs=DIR] [benchmark flags]   # e.g. --benchmark_filter=TrainStep
+//
+// Model: DIR/tat_cpu.json with joint_embedding_dim = encoder.dim of
+// DIR/owo_cpu.json (as `nec train tat` sets it from the OwO checkpoint); DIR
+// is the repository's configs/ unless given.
+// - BM_TatTrainStep/joints:J/threads:N: what TatTrainer::step does after its
+//   inputs are made: forward (train mode), reconstruction_loss, zero_grad,
+//   backward, clip_grad_norm_, AdamW at the scheduled learning rate. Inputs
+//   are a synthetic batch (B = batch_size, T = window_frames, J joints): a
+//   random tree per item (parents before children), random rotations, random
+//   rest offsets and fixed random joint embeddings (B, J, E) in place of OwO.
+//   benchmarks/peer_tat_step.py makes the same tensors with the same torch
+//   random draws, so its first losses must equal the counters loss_step0 and
+//   loss_step1 here.
+// - BM_TatEncodeClip / BM_TatDecodeClip/joints:J/threads:N: encode_clip /
+//   decode_clip of a 600-frame random clip (64-frame windows, 16 overlap), in
+//   eval mode; counter frames_per_s.
+// Counters of the training step: parameters (the peer checks its count
+// against it), step_peak_MiB (peak RSS of one step above the RSS before it,
+// after malloc_trim) and rss_peak_MiB (the process's peak RSS during that
+// step). Model, first losses and memory are made once per J, at one thread.
+// Each benchmark runs 5 repetitions (unless --benchmark_repetitions is given)
+// of a fixed number of iterations and reports mean, median, stddev, cv, min
+// and max over them of the wall-clock time and the process CPU time (all
+// threads); --benchmark_out keeps each repetition too.
+#include "nec/tat/fk.h"
+#include "nec/tat/inference.h"
+#include "nec/tat/loss.h"
+#include "nec/tat/tokenizer.h"
+#include "nec/tat/training.h"
+
+#include <benchmark/benchmark.h>
+#include <malloc.h>
+#include <nlohmann/json.hpp>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace {
+
+using nec::tat::BatchTensors;
+using nec::tat::Tokenizer;
+
+constexpr uint64_t kSeed = 0;           // torch::manual_seed before inputs and model (as the peer)
+constexpr int64_t kClipFrames = 600;    // encode / decode clip length
+constexpr int64_t kWarmupSteps = 2;     // untimed steps before a J's first measurement
+constexpr int kDefaultRepetitions = 5;
+
+std::string& configs_dir() {
+  static std::string dir = std::string(NEC_SOURCE_DIR) + "/configs";
+  return dir;
+}
+
+// tat_cpu.json, joint embeddings as wide as owo_cpu.json's encoder.
+const nec::tat::TatTrainConfig& train_config() {
+  static const nec::tat::TatTrainConfig config = [] {
+    nec::tat::TatTrainConfig c = nec::tat::read_tat_train_config(configs_dir() + "/tat_cpu.json");
+    const std::string owo_path = configs_dir() + "/owo_cpu.json";
+    std::ifstream owo(owo_path);
+    if (!owo) throw std::runtime_error("cannot read " + owo_path);
+    c.model.joint_embedding_dim = nlohmann::json::parse(owo).at("encoder").at("dim").get<int64_t>();
+    c.validate();
+    return c;
+  }();
+  return config;
+}
+
+// ---- Memory: peak RSS of a region (Linux: /proc/self/clear_refs resets VmHWM). ----
+
+int64_t status_kib(const char* field) {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  const size_t length = std::strlen(field);
+  while (std::getline(status, line)) {
+    if (line.compare(0, length, field) == 0) return std::stoll(line.substr(length + 1));
+  }
+  return -1;
+}
+
+struct PeakRss {
+  double above_start_mib = -1;  // peak RSS during the region minus RSS at its start
+  double peak_mib = -1;         // peak RSS during the region
+};
+
+// Runs `region` with the kernel's peak-RSS mark reset at its start. Free heap
+// goes back to the system first, so memory the region reuses from earlier
+// steps counts again.
+template <typename Region>
+PeakRss measure_peak_rss(Region&& region) {
+  malloc_trim(0);
+  std::ofstream("/proc/self/clear_refs") << "5";
+  const int64_t start = status_kib("VmRSS:");
+  region();
+  const int64_t peak = status_kib("VmHWM:");
+  PeakRss out;
+  if (start >= 0 && peak >= 0) {
+    out.above_start_mib = static_cast<double>(peak - start) / 1024.0;
+    out.peak_mib = static_cast<double>(peak) / 1024.0;
+  }
+  return out;
+}
+
+// ---- Synthetic inputs (peer_tat_step.py draws the same, in the same order). ----
+
+// (..., 6) Gaussian -> valid rot6D of Haar-random rotations (Gram-Schmidt).
+at::Tensor random_rot6d(at::IntArrayRef leading) {
+  std::vector<int64_t> shape(leading.begin(), leading.end());
+  shape.push_back(6);
+  return nec::tat::matrix_to_rot6d(nec::tat::rot6d_to_matrix(torch::randn(shape)));
+}
+
+// Θ (B, T, J, 9): root displacement ~ N(0, 0.02²) per frame, frame 0 at height
+// 0.9; other joints' translation channels zero; random rotations everywhere.
+at::Tensor random_features(int64_t batch, int64_t frames, int64_t joints) {
+  const at::Tensor rotations = random_rot6d({batch, frames, joints});
+  at::Tensor root_delta = torch::randn({batch, frames, 3}) * 0.02;
+  root_delta.select(1, 0).zero_();
+  root_delta.select(1, 0).select(1, 1).fill_(0.9);
+  at::Tensor translation = torch::zeros({batch, frames, joints, 3});
+  translation.select(2, 0).copy_(root_delta);
+  return torch::cat({translation, rotations}, -1);
+}
+
+struct SyntheticBatch {
+  BatchTensors batch;     // all joints and frames real
+  at::Tensor embeddings;  // (B, J, E) fixed, in place of OwO's
+};
+
+SyntheticBatch synthetic_batch(int64_t batch, int64_t frames, int64_t joints, int64_t embedding_dim) {
+  SyntheticBatch out;
+  out.batch.features = random_features(batch, frames, joints);
+  // parent(j) uniform in [0, j - 1]: a random tree with parents before children; -1 for the root.
+  const at::Tensor index = torch::arange(joints, torch::kLong);
+  out.batch.parents =
+      torch::minimum((torch::rand({batch, joints}) * index.to(torch::kFloat)).floor().to(torch::kLong), index - 1);
+  out.batch.offsets = torch::randn({batch, joints, 3}) * 0.1;
+  out.batch.offsets.select(1, 0).zero_();
+  out.batch.joint_mask = torch::ones({batch, joints}, torch::kBool);
+  out.batch.frame_mask = torch::ones({batch, frames}, torch::kBool);
+  out.embeddings = torch::randn({batch, joints, embedding_dim});
+  return out;
+}
+
+// ---- Training step ----
+
+// A model, its optimizer and one batch, kept across repetitions and thread counts.
+struct Trainee {
+  SyntheticBatch inputs;
+  Tokenizer model{nullptr};
+  std::unique_ptr<torch::optim::AdamW> optimizer;
+  int64_t parameters = 0;
+  int64_t steps = 0;                 // steps taken (learning-rate schedule position)
+  std::vector<double> first_losses;  // loss of each of the first kWarmupSteps steps
+  PeakRss memory;                    // of step kWarmupSteps + 1
+};
+
+// TatTrainer::step without the batch conversion and the OwO embeddings.
+double train_step(Trainee& t) {
+  const nec::tat::TatTrainConfig& config = train_config();
+  const double lr = nec::tat::learning_rate_at(config, t.steps++);
+  for (auto& group : t.optimizer->param_groups()) static_cast<torch::optim::AdamWOptions&>(group.options()).lr(lr);
+  t.model->train();
+  const BatchTensors& x = t.inputs.batch;
+  const nec::tat::TokenizerOutput out = t.model->forward(x.features, x.joint_mask, x.frame_mask, t.inputs.embeddings);
+  const nec::tat::ReconstructionLoss loss =
+      nec::tat::reconstruction_loss(out.reconstruction, x, out.commitment_loss, config.loss);
+  t.optimizer->zero_grad();
+  loss.total.backward();
+  if (config.grad_clip > 0) torch::nn::utils::clip_grad_norm_(t.model->parameters(), config.grad_clip);
+  t.optimizer->step();
+  const at::Tensor perplexity = out.perplexity.to(torch::kCPU, torch::kFloat64);
+  benchmark::DoNotOptimize(perplexity.data_ptr<double>());
+  return loss.total.item<double>();
+}
+
+Trainee& trainee(int64_t joints) {
+  static std::map<int64_t, std::unique_ptr<Trainee>> cache;
+  std::unique_ptr<Trainee>& slot = cache[joints];
+  if (slot) return *slot;
+  const nec::tat::TatTrainConfig& config = train_config();
+  slot = std::make_unique<Trainee>();
+  Trainee& t = *slot;
+  const int threads = torch::get_num_threads();
+  torch::set_num_threads(1);
+  torch::manual_seed(kSeed);
+  t.inputs = synthetic_batch(config.batch_size, config.window_frames, joints, config.model.joint_embedding_dim);
+  t.model = Tokenizer(config.model);
+  t.optimizer = std::make_unique<torch::optim::AdamW>(
+      t.model->parameters(), torch::optim::AdamWOptions(config.learning_rate).weight_decay(config.weight_decay));
+  for (const at::Tensor& p : t.model->parameters()) t.parameters += p.numel();
+  for (int64_t i = 0; i < kWarmupSteps; ++i) t.first_losses.push_back(train_step(t));
+  t.memory = measure_peak_rss([&] { benchmark::DoNotOptimize(train_step(t)); });
+  torch::set_num_threads(threads);
+  return t;
+}
+
+void BM_TatTrainStep(benchmark::State& state) {
+  const int64_t joints = state.range(0);
+  torch::set_num_threads(static_cast<int>(state.range(1)));
+  Trainee& t = trainee(joints);
+  for (auto _ : state) benchmark::DoNotOptimize(train_step(t));
+  const nec::tat::TatTrainConfig& config = train_config();
+  state.SetItemsProcessed(state.iterations() * config.batch_size * config.window_frames);  // frames
+  state.counters["parameters"] = static_cast<double>(t.parameters);
+  state.counters["loss_step0"] = t.first_losses.at(0);
+  state.counters["loss_step1"] = t.first_losses.at(1);
+  state.counters["step_peak_MiB"] = t.memory.above_start_mib;
+  state.counters["rss_peak_MiB"] = t.memory.peak_mib;
+}
+
+// ---- Whole-clip encode / decode ----
+
+struct Clip {
+  Tokenizer model{nullptr};  // eval mode
+  nec::Features features;    // kClipFrames x J
+  at::Tensor embeddings;     // (J, E)
+  at::Tensor codes;          // (S, R) of features
+};
+
+nec::tat::WindowOptions windows() { return {train_config().window_frames, 16}; }
+
+Clip& clip(int64_t joints) {
+  static std::map<int64_t, std::unique_ptr<Clip>> cache;
+  std::unique_ptr<Clip>& slot = cache[joints];
+  if (slot) return *slot;
+  const nec::tat::TatTrainConfig& config = train_config();
+  slot = std::make_unique<Clip>();
+  Clip& c = *slot;
+  torch::manual_seed(kSeed);
+  const at::Tensor theta = random_features(1, kClipFrames, joints)[0].contiguous();
+  c.features.frame_count = static_cast<int>(kClipFrames);
+  c.features.joint_count = static_cast<int>(joints);
+  c.features.data.assign(theta.data_ptr<float>(), theta.data_ptr<float>() + theta.numel());
+  c.embeddings = torch::randn({joints, config.model.joint_embedding_dim});
+  c.model = Tokenizer(config.model);
+  c.model->eval();
+  c.codes = nec::tat::encode_clip(*c.model, c.features, c.embeddings, windows());
+  return c;
+}
+
+void BM_TatEncodeClip(benchmark::State& state) {
+  torch::set_num_threads(static_cast<int>(state.range(1)));
+  Clip& c = clip(state.range(0));
+  for (auto _ : state) {
+    const at::Tensor codes = nec::tat::encode_clip(*c.model, c.features, c.embeddings, windows());
+    benchmark::DoNotOptimize(codes.data_ptr());
+  }
+  state.counters["frames_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations() * kClipFrames), benchmark::Counter::kIsRate);
+}
+
+void BM_TatDecodeClip(benchmark::State& state) {
+  torch::set_num_threads(static_cast<int>(state.range(1)));
+  Clip& c = clip(state.range(0));
+  const int joints = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    const nec::Features out = nec::tat::decode_clip(*c.model, c.codes, static_cast<int>(kClipFrames), c.embeddings,
+                                                    joints, 30.0, windows());
+    benchmark::DoNotOptimize(out.data.data());
+  }
+  state.counters["frames_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations() * kClipFrames), benchmark::Counter::kIsRate);
+}
+
+double smallest(const std::vector<double>& values) { return *std::min_element(values.begin(), values.end()); }
+double largest(const std::vector<double>& values) { return *std::max_element(values.begin(), values.end()); }
+
+void register_all() {
+  struct Entry {
+    const char* name;
+    void (*function)(benchmark::State&);
+    int64_t iterations_22, iterations_100;  // per repetition, for J = 22 and J = 100
+  };
+  for (const Entry& e : {Entry{"BM_TatTrainStep", BM_TatTrainStep, 3, 1},
+                         Entry{"BM_TatEncodeClip", BM_TatEncodeClip, 4, 1},
+                         Entry{"BM_TatDecodeClip", BM_TatDecodeClip, 4, 1}}) {
+    for (int64_t joints : {22, 100}) {
+      benchmark::RegisterBenchmark(e.name, e.function)
+          ->ArgNames({"joints", "threads"})
+          ->Args({joints, 1})
+          ->Args({joints, 2})
+          ->Iterations(joints == 22 ? e.iterations_22 : e.iterations_100)
+          ->Unit(benchmark::kMillisecond)
+          ->UseRealTime()            // time: wall clock
+          ->MeasureProcessCPUTime()  // cpu_time: all threads of the process
+          ->ComputeStatistics("min", smallest)
+          ->ComputeStatistics("max", largest)
+          ->DisplayAggregatesOnly(true);  // the JSON output keeps every repetition
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<char*> args(argv, argv + argc);
+  std::string repetitions = "--benchmark_repetitions=" + std::to_string(kDefaultRepetitions);
+  bool has_repetitions = false;
+  for (char* arg : args) has_repetitions |= std::strncmp(arg, "--benchmark_repetitions", 23) == 0;
+  if (!has_repetitions) args.push_back(repetitions.data());
+  int count = static_cast<int>(args.size());
+  benchmark::Initialize(&count, args.data());  // removes the --benchmark_* flags it knows
+  for (int i = 1; i < count; ++i) {
+    if (std::strncmp(args[i], "--configs=", 10) == 0) {
+      configs_dir() = args[i] + 10;
+    } else {
+      std::fprintf(stderr, "bench_tat: unknown argument '%s' (--configs=DIR or --benchmark_* flags)\n", args[i]);
+      return 2;
+    }
+  }
+  try {
+    const nec::tat::TatTrainConfig& config = train_config();
+    std::fprintf(stderr, "bench_tat: %s, batch %lld x %lld frames\n", config.model.to_string().c_str(),
+                 static_cast<long long>(config.batch_size), static_cast<long long>(config.window_frames));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_tat: %s\n", e.what());
+    return 1;
+  }
+  register_all();
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,566 @@
+#!/usr/bin/env python3
+"""The tokenizer's training step in PyTorch (Python): the peer of bench_tat.
+
+A line-by-line re-implementation of the NEC tokenizer (nec-rvq / nec-vq) of
+tat/src/tokenizer.cpp, quantizer.cpp, fk.cpp and loss.cpp: the same modules
+created in the same order (so the same torch.manual_seed gives the same
+initial weights), the same forward, the same losses, and the step of
+TatTrainer::step (zero_grad, backward, clip_grad_norm_, AdamW at the scheduled
+learning rate) on the synthetic batch of benchmarks/bench_tat.cpp, drawn with
+the same torch random calls. Its first two losses therefore equal bench_tat's
+counters loss_step0 / loss_step1 up to float rounding, which scripts/bench.sh
+checks.
+
+    /usr/bin/python3 benchmarks/peer_tat_step.py --expect-parameters N [--joints 22 100] [--threads 1 2]
+        [--configs DIR]   # tat_cpu.json and owo_cpu.json, as bench_tat --configs=DIR
+
+Prints one JSON object on stdout (per setting: wall-clock and process CPU
+time per step in ms over the repetitions, the first losses, parameter count,
+peak memory of a step); exits 1 when the parameter count differs from
+--expect-parameters (the count bench_tat reports).
+"""
+import argparse
+import ctypes
+import json
+import math
+import os
+import re
+import statistics
+import sys
+import time
+
+import torch
+import torch.nn as nn
+import torch.nn.functional as F
+
+SEED = 0                 # torch.manual_seed before inputs and model, as bench_tat
+WARMUP_STEPS = 2         # untimed steps before a J's first measurement, as bench_tat
+RESIDUAL_DILATION = 3    # tokenizer.cpp kResidualDilation
+FEED_FORWARD_MULT = 2    # tokenizer.cpp kFeedForwardMult
+MASKED_SCORE = -1e9      # tokenizer.cpp kMaskedScore
+LAPLACE_EPSILON = 1e-5   # quantizer.cpp kLaplaceEpsilon
+TINY_SQUARED_NORM = 1e-20  # fk.cpp kTinySquaredNorm
+
+
+# ---- Configuration (defaults of tat/include/nec/tat/{training,tokenizer,quantizer,loss}.h) ----
+
+def read_config(configs):
+    with open(os.path.join(configs, "tat_cpu.json")) as f:
+        raw = json.load(f)
+    with open(os.path.join(configs, "owo_cpu.json")) as f:
+        embedding_dim = json.load(f)["encoder"]["dim"]
+    model = raw.get("model", {})
+    quantizer = model.get("quantizer", {})
+    loss = raw.get("loss", {})
+    kind = model.get("kind", "nec-rvq")
+    if kind not in ("nec-rvq", "nec-vq"):
+        sys.exit(f"peer_tat_step: model.kind {kind!r} is not re-implemented (nec-rvq, nec-vq only)")
+    return {
+        "joint_embedding_dim": embedding_dim,
+        "dim": model.get("dim", 128),
+        "blocks": model.get("blocks", 2),
+        "attention_layers": model.get("attention_layers", 1),
+        "heads": model.get("heads", 4),
+        "layers": quantizer.get("layers", 4),
+        "codebook_size": quantizer.get("codebook_size", 256),
+        "code_dim": quantizer.get("code_dim", 128),
+        "ema_decay": quantizer.get("ema_decay", 0.99),
+        "commitment_weight": quantizer.get("commitment_weight", 0.02),
+        "dead_code_threshold": quantizer.get("dead_code_threshold", 1.0),
+        "quantize_dropout": quantizer.get("quantize_dropout", 0.2),
+        "loss": {k: loss.get(k, d) for k, d in (("rotation", 1.0), ("root", 1.0), ("position", 1.0),
+                                                ("velocity", 0.5))},
+        "learning_rate": raw.get("learning_rate", 2e-4),
+        "final_learning_rate": raw.get("final_learning_rate", 2e-5),
+        "warmup_steps": raw.get("warmup_steps", 200),
+        "weight_decay": raw.get("weight_decay", 0.0),
+        "grad_clip": raw.get("grad_clip", 1.0),
+        "steps": raw.get("steps", 4000),
+        "batch_size": raw.get("batch_size", 32),
+        "window_frames": raw.get("window_frames", 64),
+    }
+
+
+def learning_rate_at(c, step):
+    """training.cpp learning_rate_at: linear warmup, then cosine to final_learning_rate."""
+    if step < c["warmup_steps"]:
+        return c["learning_rate"] * (step + 1) / c["warmup_steps"]
+    span = max(1, c["steps"] - c["warmup_steps"])
+    progress = min(1.0, (step - c["warmup_steps"]) / span)
+    return c["final_learning_rate"] + 0.5 * (c["learning_rate"] - c["final_learning_rate"]) * (
+        1.0 + math.cos(math.pi * progress))
+
+
+# ---- Tokenizer (tokenizer.cpp) ----
+
+def rest_pose_features():
+    """(9): zero displacement, identity rot6D."""
+    rest = torch.zeros(9)
+    rest[3] = 1.0
+    rest[7] = 1.0
+    return rest
+
+
+class ResidualUnit(nn.Module):
+    """x + pointwise(ReLU(dilated(ReLU(x)))); (N, D, T) -> (N, D, T)."""
+
+    def __init__(self, dim):
+        super().__init__()
+        self.dilated = nn.Conv1d(dim, dim, 3, padding=RESIDUAL_DILATION, dilation=RESIDUAL_DILATION)
+        self.pointwise = nn.Conv1d(dim, dim, 1)
+
+    def forward(self, x):
+        return x + self.pointwise(torch.relu(self.dilated(torch.relu(x))))
+
+
+class DownBlock(nn.Module):
+    """Conv (k4, s2, p1) + ResNet1D; (N, D, T) -> (N, D, T / 2)."""
+
+    def __init__(self, dim):
+        super().__init__()
+        self.conv = nn.Conv1d(dim, dim, 4, stride=2, padding=1)
+        self.residual = ResidualUnit(dim)
+
+    def forward(self, x):
+        return self.residual(self.conv(x))
+
+
+class UpBlock(nn.Module):
+    """Nearest x2, conv (k3, p1) + ResNet1D; (N, D, T) -> (N, D, 2 T)."""
+
+    def __init__(self, dim):
+        super().__init__()
+        self.conv = nn.Conv1d(dim, dim, 3, padding=1)
+        self.residual = ResidualUnit(dim)
+
+    def forward(self, x):
+        n, d, t = x.shape
+        repeated = x.unsqueeze(-1).expand(n, d, t, 2).reshape(n, d, 2 * t)
+        return self.residual(self.conv(repeated))
+
+
+class SpatialAttention(nn.Module):
+    """Pre-norm transformer layer over the tokens of each time step."""
+
+    def __init__(self, dim, heads):
+        super().__init__()
+        self.heads = heads
+        self.attention_norm = nn.LayerNorm(dim)
+        self.qkv = nn.Linear(dim, 3 * dim)
+        self.out = nn.Linear(dim, dim)
+        self.ffn_norm = nn.LayerNorm(dim)
+        self.ffn_in = nn.Linear(dim, FEED_FORWARD_MULT * dim)
+        self.ffn_out = nn.Linear(FEED_FORWARD_MULT * dim, dim)
+
+    def forward(self, x, key_bias, first_token_only=False):
+        """x (B, T, N, D); key_bias (B, 1, 1, 1, N) -> (B, T, N or 1, D)."""
+        b, t, n, d = x.shape
+        head_dim = d // self.heads
+        queries = 1 if first_token_only else n
+        normalized = self.attention_norm(x)
+        qkv = self.qkv(normalized).view(b, t, n, 3, self.heads, head_dim).permute(3, 0, 1, 4, 2, 5)
+        query = qkv[0].narrow(3, 0, queries) * (1.0 / math.sqrt(head_dim))
+        scores = torch.matmul(query, qkv[1].transpose(-1, -2)) + key_bias  # (B, T, H, Q, N)
+        mixed = torch.matmul(torch.softmax(scores, -1), qkv[2])           # (B, T, H, Q, Dh)
+        attended = x.narrow(2, 0, queries) + self.out(mixed.permute(0, 1, 3, 2, 4).reshape(b, t, queries, d))
+        return attended + self.ffn_out(F.gelu(self.ffn_in(self.ffn_norm(attended))))
+
+
+def per_token(block, tokens):
+    """A temporal block on every token sequence: (B, T, N, D) -> (B, T', N, D)."""
+    b, t, n, d = tokens.shape
+    out = block(tokens.permute(0, 2, 3, 1).reshape(b * n, d, t))
+    return out.view(b, n, d, out.size(2)).permute(0, 3, 1, 2).contiguous()
+
+
+def key_bias(joint_mask):
+    """(B, J) bool -> (B, 1, 1, 1, 1 + J) additive key bias; token 0 never masked."""
+    keep = torch.cat([torch.ones(joint_mask.size(0), 1, dtype=joint_mask.dtype), joint_mask], 1)
+    bias = torch.zeros(keep.shape).masked_fill_(keep.logical_not(), MASKED_SCORE)
+    return bias.view(keep.size(0), 1, 1, 1, keep.size(1))
+
+
+class NecEncoder(nn.Module):
+    def __init__(self, c):
+        super().__init__()
+        d = c["dim"]
+        # tokenizer.cpp builds this MLP as Sequential(Linear(9, d), ReLU(), Linear(d, d)); GCC evaluates
+        # those constructor arguments right to left, so Linear(d, d) draws its initial weights first.
+        hidden = nn.Linear(d, d)
+        self.input = nn.Sequential(nn.Linear(9, d), nn.ReLU(), hidden)
+        self.embedding = nn.Linear(c["joint_embedding_dim"], d)
+        self.virtual_joint = nn.Parameter(torch.randn(d) * 0.02)
+        self.temporal = nn.ModuleList()
+        self.spatial = nn.ModuleList()
+        for _ in range(c["blocks"]):
+            self.temporal.append(DownBlock(d))
+            for _ in range(c["attention_layers"]):
+                self.spatial.append(SpatialAttention(d, c["heads"]))
+        self.attention_layers = c["attention_layers"]
+        self.final_norm = nn.LayerNorm(d)
+        self.to_latent = nn.Linear(d, c["code_dim"])
+
+    def forward(self, features, joint_mask, joint_embeddings):
+        """(B, T, J, 9) -> latent (B, T / r, C)."""
+        b, t = features.shape[:2]
+        joints = self.input(features) + self.embedding(joint_embeddings).unsqueeze(1)
+        tokens = torch.cat([self.virtual_joint.expand(b, t, 1, self.virtual_joint.size(0)), joints], 2)
+        bias = key_bias(joint_mask)
+        blocks = len(self.temporal)
+        for block in range(blocks):
+            tokens = per_token(self.temporal[block], tokens)
+            for layer in range(self.attention_layers):
+                last = block + 1 == blocks and layer + 1 == self.attention_layers
+                tokens = self.spatial[block * self.attention_layers + layer](tokens, bias, last)
+        return self.to_latent(self.final_norm(tokens.select(2, 0)))
+
+
+class NecDecoder(nn.Module):
+    def __init__(self, c):
+        super().__init__()
+        d, code_dim = c["dim"], c["code_dim"]
+        self.virtual_from_latent = nn.Linear(code_dim, d)
+        self.joint_from_latent = nn.Linear(code_dim, d)
+        self.joint_from_embedding = nn.Linear(c["joint_embedding_dim"], d, bias=False)
+        self.joint_hidden = nn.Linear(d, d)
+        self.spatial = nn.ModuleList()
+        self.temporal = nn.ModuleList()
+        for _ in range(c["blocks"]):
+            for _ in range(c["attention_layers"]):
+                self.spatial.append(SpatialAttention(d, c["heads"]))
+            self.temporal.append(UpBlock(d))
+        self.attention_layers = c["attention_layers"]
+        self.output = nn.Linear(d, 9)
+
+    def forward(self, quantized, joint_mask, joint_embeddings):
+        """(B, S, C) -> (B, S r, J, 9), zero at padded joints."""
+        joints = joint_mask.size(1)
+        virtual_joint = self.virtual_from_latent(quantized).unsqueeze(2)
+        joint_features = self.joint_hidden(torch.relu(
+            self.joint_from_latent(quantized).unsqueeze(2) + self.joint_from_embedding(joint_embeddings).unsqueeze(1)))
+        tokens = torch.cat([virtual_joint, joint_features], 2)
+        bias = key_bias(joint_mask)
+        blocks = len(self.temporal)
+        for block in range(blocks):
+            for layer in range(self.attention_layers):
+                tokens = self.spatial[block * self.attention_layers + layer](tokens, bias)
+            if block + 1 == blocks:
+                tokens = tokens.narrow(2, 1, joints)
+            tokens = per_token(self.temporal[block], tokens)
+        out = self.output(tokens) + rest_pose_features()
+        return out * joint_mask.view(joint_mask.size(0), 1, joints, 1).to(out.dtype)
+
+
+# ---- Residual quantizer (quantizer.cpp) ----
+
+def sample_rows(rows, weight, count):
+    return rows.index_select(0, torch.multinomial(weight, count, replacement=True))
+
+
+class ResidualQuantizer(nn.Module):
+    def __init__(self, c):
+        super().__init__()
+        self.c = c
+        r, k, d = c["layers"], c["codebook_size"], c["code_dim"]
+        self.register_buffer("codebooks", torch.randn(r, k, d))
+        self.register_buffer("ema_counts", torch.ones(r, k))
+        self.register_buffer("ema_sums", self.codebooks.clone())
+        self.register_buffer("initialized", torch.zeros((), dtype=torch.bool))
+
+    def forward(self, latent, mask):
+        """latent (N, C), mask (N) bool -> quantized (N, C), codes (N, R), commitment, perplexity (R)."""
+        c = self.c
+        layers, size = c["layers"], c["codebook_size"]
+        rows = latent.size(0)
+        weight = mask.to(self.codebooks.dtype)
+        used_layers, update, seed = layers, False, False
+        if self.training:
+            if c["quantize_dropout"] > 0 and layers > 1 and \
+                    torch.rand(1, dtype=torch.float64).item() < c["quantize_dropout"]:
+                used_layers = torch.randint(1, layers + 1, (1,), dtype=torch.long).item()
+            if rows > 0:
+                flags = torch.stack([weight.sum() > 0, self.initialized]).cpu()
+                update = bool(flags[0].item())
+                seed = update and not bool(flags[1].item())
+
+        codes = torch.full((rows, layers), -1, dtype=torch.long)
+        perplexity = torch.zeros(layers)
+        with torch.no_grad():
+            residual = latent.detach().to(self.codebooks.dtype).clone()
+            total = torch.zeros_like(residual)
+            kept = weight.sum().clamp_min(1.0)
+            for r in range(used_layers):
+                codebook = self.codebooks[r]
+                if seed:
+                    codebook.copy_(sample_rows(residual, weight, size))
+                    self.ema_sums[r].copy_(codebook)
+                    self.ema_counts[r].fill_(1.0)
+                distance = torch.addmm((codebook * codebook).sum(1).unsqueeze(0), residual, codebook.t(),
+                                       beta=1, alpha=-2)
+                index = distance.argmin(1)
+                chosen = codebook.index_select(0, index)
+                codes.select(1, r).copy_(index)
+                counts = torch.zeros(size).index_add_(0, index, weight)
+                usage = counts / kept
+                perplexity.select(0, r).copy_(torch.exp(-(usage * torch.log(usage.clamp_min(1e-10))).sum()))
+                if update:
+                    decay = c["ema_decay"]
+                    sums = torch.zeros(size, c["code_dim"]).index_add_(0, index, residual * weight.unsqueeze(1))
+                    self.ema_counts[r].mul_(decay).add_(counts, alpha=1.0 - decay)
+                    self.ema_sums[r].mul_(decay).add_(sums, alpha=1.0 - decay)
+                    total_count = self.ema_counts[r].sum()
+                    smoothed = (self.ema_counts[r] + LAPLACE_EPSILON) / (total_count + size * LAPLACE_EPSILON) * \
+                        total_count
+                    codebook.copy_(self.ema_sums[r] / smoothed.unsqueeze(1))
+                    threshold = c["dead_code_threshold"]
+                    if threshold > 0:
+                        dead = (self.ema_counts[r] < threshold).unsqueeze(1)
+                        fresh = sample_rows(residual, weight, size)
+                        codebook.copy_(torch.where(dead, fresh, codebook))
+                        self.ema_sums[r].copy_(torch.where(dead, fresh * threshold, self.ema_sums[r]))
+                        self.ema_counts[r].masked_fill_(dead.squeeze(1), threshold)
+                total += chosen
+                residual -= chosen
+            if seed:
+                self.initialized.fill_(True)
+            quantized = total.to(latent.dtype)
+        squared_error = (latent - quantized).pow(2).mean(1)
+        commitment = c["commitment_weight"] * (squared_error * weight.to(latent.dtype)).sum() / \
+            weight.sum().clamp_min(1.0).to(latent.dtype)
+        return latent + (quantized - latent).detach(), codes, commitment, perplexity
+
+
+class Tokenizer(nn.Module):
+    def __init__(self, c):
+        super().__init__()
+        self.downsampling = 2 ** c["blocks"]
+        self.encoder = NecEncoder(c)
+        self.decoder = NecDecoder(c)
+        self.quantizer = ResidualQuantizer(c)
+
+    def forward(self, features, joint_mask, frame_mask, joint_embeddings):
+        joint_mask = joint_mask.to(torch.bool)
+        latent = self.encoder(features, joint_mask, joint_embeddings)  # (B, S, C)
+        b, s, code_dim = latent.shape
+        step_mask = frame_mask.to(torch.bool).reshape(b, s, self.downsampling).any(-1)
+        quantized, codes, commitment, perplexity = self.quantizer(latent.reshape(b * s, code_dim),
+                                                                  step_mask.reshape(b * s))
+        reconstruction = self.decoder(quantized.view(b, s, code_dim), joint_mask, joint_embeddings)
+        return reconstruction, codes.view(b, s, -1), commitment, perplexity
+
+
+# ---- Differentiable FK (fk.cpp) ----
+
+def normalized(v):
+    return v * (v * v).sum(-1, keepdim=True).clamp_min(TINY_SQUARED_NORM).rsqrt()
+
+
+def rot6d_to_matrix(rot6d):
+    a, b = rot6d.narrow(-1, 0, 3), rot6d.narrow(-1, 3, 3)
+    x = normalized(a)
+    y = normalized(b - (x * b).sum(-1, keepdim=True) * x)
+    z = torch.linalg.cross(x, y, dim=-1)
+    return torch.stack([x, y, z], -1)
+
+
+def matrix_to_rot6d(matrix):
+    return torch.cat([matrix.select(-1, 0), matrix.select(-1, 1)], -1)
+
+
+def heading_matrix(rotation):
+    c = rotation.select(-1, 0).select(-1, 0) + rotation.select(-1, 2).select(-1, 2)
+    s = rotation.select(-2, 0).select(-1, 2) - rotation.select(-2, 2).select(-1, 0)
+    squared = c * c + s * s
+    defined = squared > TINY_SQUARED_NORM
+    inverse = squared.clamp_min(TINY_SQUARED_NORM).rsqrt()
+    cosine = torch.where(defined, c * inverse, torch.ones_like(c))
+    sine = torch.where(defined, s * inverse, torch.zeros_like(s))
+    zero, one = torch.zeros_like(c), torch.ones_like(c)
+    rows = torch.stack([cosine, zero, sine, zero, one, zero, -sine, zero, cosine], -1)
+    return rows.view(rotation.shape)
+
+
+def features_to_positions(features, parents, offsets):
+    """(B, T, J, 9), parents (B, J), offsets (B, J, 3) -> positions (B, T, J, 3)."""
+    batch, frames, joints = features.shape[:3]
+    local = rot6d_to_matrix(features.narrow(-1, 3, 6))
+    root_rotation = local.select(2, 0)
+    delta = features.select(2, 0).narrow(-1, 0, 3)
+    world_delta = torch.matmul(heading_matrix(root_rotation), delta.unsqueeze(-1)).squeeze(-1)
+    root_position = world_delta.cumsum(1)
+    rest_offsets = offsets.to(features.dtype).narrow(1, 1, joints - 1)
+    rotation = torch.cat([local, torch.eye(3).expand(batch, frames, 1, 3, 3)], 2)
+    translation = torch.cat([root_position.unsqueeze(2),
+                             rest_offsets.unsqueeze(1).expand(batch, frames, joints - 1, 3),
+                             torch.zeros(batch, frames, 1, 3)], 2)
+    ancestor = parents.to(torch.long).clone()
+    ancestor.select(1, 0).fill_(joints)
+    ancestor = torch.where(ancestor < 0, torch.zeros_like(ancestor), ancestor)
+    ancestor = torch.cat([ancestor, torch.full((batch, 1), joints, dtype=torch.long)], 1)
+    reach = 1
+    while reach < joints:
+        index = ancestor.view(batch, 1, joints + 1, 1)
+        above_rotation = torch.gather(rotation, 2, index.unsqueeze(-1).expand(batch, frames, joints + 1, 3, 3))
+        above_translation = torch.gather(translation, 2, index.expand(batch, frames, joints + 1, 3))
+        translation = above_translation + torch.matmul(above_rotation, translation.unsqueeze(-1)).squeeze(-1)
+        rotation = torch.matmul(above_rotation, rotation)
+        ancestor = torch.gather(ancestor, 1, ancestor)
+        reach *= 2
+    return translation.narrow(2, 0, joints).contiguous()
+
+
+# ---- Loss (loss.cpp) ----
+
+def masked_l1(a, b, weight):
+    count = weight.sum() * float(a.size(-1))
+    return ((a - b).abs() * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0)
+
+
+def reconstruction_loss(prediction, x, commitment, w):
+    b, t, j = prediction.shape[:3]
+    frame = x["frame_mask"].to(prediction.dtype)
+    real = frame.view(b, t, 1) * x["joint_mask"].to(prediction.dtype).view(b, 1, j)
+    target = x["features"]
+    rotation = masked_l1(prediction.narrow(-1, 3, 6), target.narrow(-1, 3, 6), real)
+    root = masked_l1(prediction.select(2, 0).narrow(-1, 0, 3), target.select(2, 0).narrow(-1, 0, 3), frame)
+    predicted = features_to_positions(prediction, x["parents"], x["offsets"])
+    with torch.no_grad():
+        expected = features_to_positions(target, x["parents"], x["offsets"])
+    position = masked_l1(predicted, expected, real)
+    both = real[:, 1:] * real[:, :-1]
+    velocity = masked_l1(predicted[:, 1:] - predicted[:, :-1], expected[:, 1:] - expected[:, :-1], both)
+    commitment = commitment.to(prediction.dtype).reshape(())
+    total = w["rotation"] * rotation + w["root"] * root + w["position"] * position + \
+        w["velocity"] * velocity + commitment
+    terms = torch.stack([rotation, root, position, velocity, commitment]).detach().to("cpu", torch.float64)
+    return total, terms.tolist()
+
+
+# ---- Synthetic batch (bench_tat.cpp synthetic_batch, same draws in the same order) ----
+
+def random_features(batch, frames, joints):
+    rotations = matrix_to_rot6d(rot6d_to_matrix(torch.randn(batch, frames, joints, 6)))
+    root_delta = torch.randn(batch, frames, 3) * 0.02
+    root_delta.select(1, 0).zero_()
+    root_delta.select(1, 0).select(1, 1).fill_(0.9)
+    translation = torch.zeros(batch, frames, joints, 3)
+    translation.select(2, 0).copy_(root_delta)
+    return torch.cat([translation, rotations], -1)
+
+
+def synthetic_batch(batch, frames, joints, embedding_dim):
+    x = {"features": random_features(batch, frames, joints)}
+    index = torch.arange(joints, dtype=torch.long)
+    x["parents"] = torch.minimum((torch.rand(batch, joints) * index.to(torch.float)).floor().to(torch.long), index - 1)
+    x["offsets"] = torch.randn(batch, joints, 3) * 0.1
+    x["offsets"].select(1, 0).zero_()
+    x["joint_mask"] = torch.ones(batch, joints, dtype=torch.bool)
+    x["frame_mask"] = torch.ones(batch, frames, dtype=torch.bool)
+    x["embeddings"] = torch.randn(batch, joints, embedding_dim)
+    return x
+
+
+# ---- The step and its measurement ----
+
+class Trainee:
+    def __init__(self, c, joints):
+        self.c = c
+        torch.manual_seed(SEED)
+        self.x = synthetic_batch(c["batch_size"], c["window_frames"], joints, c["joint_embedding_dim"])
+        self.model = Tokenizer(c)
+        self.optimizer = torch.optim.AdamW(self.model.parameters(), lr=c["learning_rate"],
+                                           weight_decay=c["weight_decay"])
+        self.parameters = sum(p.numel() for p in self.model.parameters())
+        self.steps = 0
+
+    def step(self):
+        """TatTrainer::step without the batch conversion and the OwO embeddings."""
+        lr = learning_rate_at(self.c, self.steps)
+        self.steps += 1
+        for group in self.optimizer.param_groups:
+            group["lr"] = lr
+        self.model.train()
+        x = self.x
+        reconstruction, _, commitment, perplexity = self.model(x["features"], x["joint_mask"], x["frame_mask"],
+                                                               x["embeddings"])
+        total, _ = reconstruction_loss(reconstruction, x, commitment, self.c["loss"])
+        self.optimizer.zero_grad()
+        total.backward()
+        if self.c["grad_clip"] > 0:
+            torch.nn.utils.clip_grad_norm_(self.model.parameters(), self.c["grad_clip"])
+        self.optimizer.step()
+        perplexity.to("cpu", torch.float64).tolist()
+        return total.item()
+
+
+def status_kib(field):
+    with open("/proc/self/status") as f:
+        match = re.search(rf"^{field}:\s+(\d+)", f.read(), re.MULTILINE)
+    return int(match.group(1)) if match else -1
+
+
+def measure_peak_rss(region):
+    """(peak RSS above the start, peak RSS) in MiB of region(), as bench_tat measure_peak_rss."""
+    ctypes.CDLL("libc.so.6").malloc_trim(0)
+    with open("/proc/self/clear_refs", "w") as f:
+        f.write("5")
+    start = status_kib("VmRSS")
+    region()
+    peak = status_kib("VmHWM")
+    return (peak - start) / 1024.0, peak / 1024.0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--configs", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "configs"),
+                        help="folder with tat_cpu.json and owo_cpu.json (default: the repository's configs/)")
+    parser.add_argument("--joints", type=int, nargs="+", default=[22, 100], help="skeleton sizes (default: 22 100)")
+    parser.add_argument("--iterations", type=int, nargs="+", default=[3, 1],
+                        help="timed steps per repetition, one per --joints value (default: 3 1, as bench_tat)")
+    parser.add_argument("--threads", type=int, nargs="+", default=[1, 2], help="torch threads (default: 1 2)")
+    parser.add_argument("--repetitions", type=int, default=5, help="repetitions per setting (default: 5)")
+    parser.add_argument("--expect-parameters", type=int, default=None,
+                        help="parameter count bench_tat reported; exit 1 when this model's differs")
+    args = parser.parse_args()
+    if len(args.iterations) != len(args.joints):
+        parser.error("give one --iterations value per --joints value")
+
+    c = read_config(args.configs)
+    result = {"torch": torch.__version__, "python": sys.version.split()[0], "repetitions": args.repetitions,
+              "runs": []}
+    for joints, iterations in zip(args.joints, args.iterations):
+        torch.set_num_threads(1)  # model, first losses and memory at one thread, as bench_tat
+        t = Trainee(c, joints)
+        print(f"peer_tat_step: parameters: python {t.parameters}, bench_tat "
+              f"{args.expect_parameters if args.expect_parameters is not None else '(not given)'}", file=sys.stderr)
+        if args.expect_parameters is not None and t.parameters != args.expect_parameters:
+            print(f"peer_tat_step: parameter count {t.parameters} differs from bench_tat's {args.expect_parameters}: "
+                  "the re-implementation is not the same architecture", file=sys.stderr)
+            sys.exit(1)
+        result["parameters"] = t.parameters
+        first_losses = [t.step() for _ in range(WARMUP_STEPS)]
+        step_peak, rss_peak = measure_peak_rss(t.step)
+        for threads in args.threads:
+            torch.set_num_threads(threads)
+            times, cpu_times = [], []
+            for _ in range(args.repetitions):
+                start, cpu_start = time.perf_counter(), time.process_time()
+                for _ in range(iterations):
+                    t.step()
+                times.append((time.perf_counter() - start) / iterations * 1e3)
+                cpu_times.append((time.process_time() - cpu_start) / iterations * 1e3)
+            run = {"joints": joints, "threads": threads, "iterations": iterations,
+                   "median_ms": statistics.median(times), "min_ms": min(times), "max_ms": max(times),
+                   "times_ms": times, "cpu_median_ms": statistics.median(cpu_times), "cpu_times_ms": cpu_times,
+                   "loss_step0": first_losses[0], "loss_step1": first_losses[1],
+                   "step_peak_MiB": step_peak, "rss_peak_MiB": rss_peak}
+            result["runs"].append(run)
+            print(f"peer_tat_step: joints {joints} threads {threads}: median {run['median_ms']:.1f} ms "
+                  f"({run['min_ms']:.1f}-{run['max_ms']:.1f}), first losses {first_losses[0]:.6f} "
+                  f"{first_losses[1]:.6f}", file=sys.stderr)
+    json.dump(result, sys.stdout, indent=1)
+    print()
+
+
+if __name__ == "__main__":
+    main()
