@@ -1,5 +1,6 @@
 // nec eval owo: a pretrained OwO encoder on skeletons it never trained on, and on its training skeletons.
 #include "command_line.h"
+#include "torch_runtime.h"
 #include "commands.h"
 
 #include "nec/motion/error.h"
@@ -108,17 +109,11 @@ int run_eval_owo(int argc, char** argv) {
   cli.example("nec eval owo --model runs/owo --data cache/ --json owo_eval.json");
   if (!cli.parse(argc, argv)) return 0;
   const std::string model_dir = cli.value("--model");
-  const int threads = cli.integer("--threads");
-  if (threads < 0) throw UsageError("--threads must be >= 0");
-  c10::Device device(c10::kCPU);
-  try {
-    device = owo::training_device(cli.value("--device"));
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
-  }
+  const int threads = threads_option(cli);
+  const c10::Device device = device_option(cli);
   const std::vector<std::string> caches = cli.list("--data");
   if (caches.empty()) throw UsageError("--data needs at least one cache");
-  torch::set_num_threads(threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  use_torch_threads(threads);
   const auto start = std::chrono::steady_clock::now();
 
   owo::LoadedOwoCheckpoint loaded = owo::load_owo_checkpoint(model_dir);

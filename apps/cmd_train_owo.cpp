@@ -1,5 +1,6 @@
 // nec train owo: pretrain the OwO skeleton encoder on the skeletons of dataset caches.
 #include "command_line.h"
+#include "torch_runtime.h"
 #include "commands.h"
 #include "training_loop.h"
 
@@ -83,14 +84,8 @@ int run_train_owo(int argc, char** argv) {
   const bool resume = cli.is_set("--resume");
   const std::vector<std::string> caches = cli.list("--data");
   if (caches.empty()) throw UsageError("--data needs at least one cache");
-  const int threads = cli.integer("--threads");
-  if (threads < 0) throw UsageError("--threads must be >= 0");
-  c10::Device device(c10::kCPU);
-  try {
-    device = owo::training_device(cli.value("--device"));
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
-  }
+  const int threads = threads_option(cli);
+  const c10::Device device = device_option(cli);
 
   owo::OwoTrainingConfig config = owo::parse_owo_training_config(read_file(config_path, size_t{1} << 24), config_path);
   if (!cli.value("--steps").empty()) {
@@ -103,7 +98,7 @@ int run_train_owo(int argc, char** argv) {
     config.encoder.name_dim = 0;
   }
   check_out_dir(out, resume);
-  torch::set_num_threads(threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  use_torch_threads(threads);
 
   std::optional<text::WordVectors> vectors;
   if (config.names) {

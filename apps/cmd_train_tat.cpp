@@ -1,6 +1,7 @@
 // nec train tat: train the tokenizer (or a baseline) on a dataset cache with a frozen OwO encoder.
 #include "command_line.h"
 #include "commands.h"
+#include "torch_runtime.h"
 #include "training_loop.h"
 
 #include "nec/motion/error.h"
@@ -20,19 +21,6 @@
 #include <thread>
 
 namespace nec::app {
-namespace {
-
-c10::Device parse_device(const std::string& name) {
-  if (name == "cpu") return torch::kCPU;
-  if (name == "cuda") {
-    if (!torch::cuda::is_available()) throw UsageError("--device cuda: this torch has no CUDA device");
-    return torch::kCUDA;
-  }
-  throw UsageError("--device must be cpu or cuda, got '" + name + "'");
-}
-
-}  // namespace
-
 int run_train_tat(int argc, char** argv) {
   CommandLine cli("nec train tat",
                   "Train the topology-agnostic tokenizer (or a baseline: model.kind nec-vq, zero-pad-rvq) on the\n"
@@ -47,15 +35,13 @@ int run_train_tat(int argc, char** argv) {
   cli.option("--kind", "KIND", "", "override model.kind: nec-rvq, nec-vq or zero-pad-rvq");
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
   cli.option("--threads", "N", "0", "torch threads; 0 = all cores");
-  cli.option("--device", "DEVICE", "cpu", "cpu or cuda");
+  cli.option("--device", "DEVICE", "cpu", "cpu, cuda or cuda:N");
   cli.flag("--resume", "continue the run whose checkpoint is in --out (same config)");
   cli.example("nec train tat --config configs/tat_cpu.json --data cache/ --owo runs/owo --out runs/tat");
   cli.example("nec train tat --config configs/tat_cpu.json --data cache/ --out runs/tat --resume");
   if (!cli.parse(argc, argv)) return 0;
-  const int threads = cli.integer("--threads");
-  if (threads < 0) throw UsageError("--threads must be >= 0");
-  torch::set_num_threads(threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
-  const c10::Device device = parse_device(cli.value("--device"));
+  use_torch_threads(threads_option(cli));
+  const c10::Device device = device_option(cli);
   const std::string out_dir = cli.value("--out");
   const bool resume = cli.is_set("--resume");
 

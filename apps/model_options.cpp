@@ -1,6 +1,8 @@
 // Shared steps of the commands that run a trained tokenizer.
 #include "model_options.h"
 
+#include "torch_runtime.h"
+
 #include "nec/motion/bvh.h"
 #include "nec/motion/error.h"
 
@@ -37,18 +39,16 @@ TokenizerOptions tokenizer_options(const CommandLine& cli) {
   TokenizerOptions options;
   if (cli.declared("--model")) options.model = cli.value("--model");
   options.glove = cli.value("--glove");
-  options.threads = cli.integer("--threads");
+  options.threads = threads_option(cli);
   if (cli.value("--window-overlap") != "auto") {
     options.overlap_frames = cli.integer("--window-overlap");
     if (options.overlap_frames < 0) throw UsageError("--window-overlap must be >= 0 or auto");
   }
-  if (options.threads < 0) throw UsageError("--threads must be >= 0");
   return options;
 }
 
 TokenizerSession open_tokenizer(const TokenizerOptions& options) {
-  const int threads = options.threads > 0 ? options.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  torch::set_num_threads(threads);
+  use_torch_threads(options.threads);
   TokenizerSession session;
   session.model = tat::load_tat_checkpoint(options.model);
   if (session.model.owo->encoder->config().name_dim > 0 &&
