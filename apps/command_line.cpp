@@ -1,11 +1,14 @@
 // Command-line parsing for the nec subcommands.
 #include "command_line.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <sstream>
 
 namespace nec::app {
@@ -184,6 +187,23 @@ const std::string& CommandLine::positional_value(const std::string& name) const 
   const auto& values = positionals(name);
   if (values.empty()) throw std::logic_error("CommandLine: no value for " + name);
   return values.front();
+}
+
+int run_nested(const std::string& usage, const std::string& list_title, const std::string& kind,
+               const std::vector<NestedCommand>& commands, int argc, char** argv) {
+  if (argc < 1 || std::strcmp(argv[0], "--help") == 0 || std::strcmp(argv[0], "-h") == 0) {
+    fmt::print("usage: {}\n\n{}:\n", usage, list_title);
+    for (const NestedCommand& c : commands) fmt::print("  {:<6} {}\n", c.name, c.summary);
+    const std::string command = usage.substr(0, usage.find(" -"));  // "nec train MODEL"
+    fmt::print("\n`{} --help` shows its options and defaults.\n", command);
+    return argc < 1 ? 2 : 0;
+  }
+  std::string known;
+  for (const NestedCommand& c : commands) {
+    known += (known.empty() ? "" : ", ") + std::string(c.name);
+    if (std::strcmp(argv[0], c.name) == 0) return c.run(argc - 1, argv + 1);
+  }
+  throw UsageError("unknown " + kind + " '" + argv[0] + "' (known: " + known + ")");
 }
 
 }  // namespace nec::app

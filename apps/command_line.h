@@ -73,4 +73,17 @@ class CommandLine {
   std::map<std::string, std::vector<std::string>> positional_values_;
 };
 
+// A command under a command, e.g. `nec train owo`.
+struct NestedCommand {
+  const char* name;          // e.g. "owo"
+  int (*run)(int, char**);   // gets the arguments after the name
+  const char* summary;
+};
+
+// Runs the command of `commands` named by argv[0]. With no argument or --help
+// prints `usage`, then each command under `list_title` (exit 2 / 0); an unknown
+// name throws UsageError "unknown <kind> 'x' (known: a, b)".
+int run_nested(const std::string& usage, const std::string& list_title, const std::string& kind,
+               const std::vector<NestedCommand>& commands, int argc, char** argv);
+
 }  // namespace nec::app
