@@ -145,6 +145,21 @@ TEST(TatQuantizer, ResetsDeadCodesToKeptResiduals) {
   EXPECT_GE(buffer(rvq, "ema_counts")[0][3].item<double>(), rvq->config().dead_code_threshold);
 }
 
+TEST(TatQuantizer, SeedsLaterLayersAtResidualsTheFirstLeavesUnexplained) {
+  // As many rows as codes: a first layer seeded at data rows explains those rows
+  // exactly, so a second layer seeded uniformly from the residuals would get many
+  // zero codes (duplicates that never learn anything).
+  torch::manual_seed(7);
+  QuantizerConfig config = small_config(2, 32, 4);
+  config.dead_code_threshold = 0.0;  // seeding alone
+  ResidualQuantizer rvq(config);
+  rvq->forward(torch::randn({32, 4}));
+  const at::Tensor norms = buffer(rvq, "codebooks")[1].norm(2, 1);
+  const int64_t zero_codes = (norms < 1e-6).sum().item<int64_t>();
+  std::printf("second-layer codes at zero residuals: %lld of 32\n", static_cast<long long>(zero_codes));
+  EXPECT_EQ(zero_codes, 0);
+}
+
 TEST(TatQuantizer, MaskedRowsDoNotInfluenceTheCodebooks) {
   QuantizerConfig config = small_config(3, 16, 4);
   config.quantize_dropout = 0.5;

@@ -39,7 +39,11 @@ std::string OwoConfig::to_string() const {
 }
 
 torch::nn::Sequential make_mlp(int64_t in, int64_t hidden, int64_t out) {
-  return torch::nn::Sequential(torch::nn::Linear(in, hidden), torch::nn::ReLU(), torch::nn::Linear(hidden, out));
+  // Built in separate statements: the order in which function arguments are
+  // evaluated is unspecified, and it decides which layer gets which random weights.
+  torch::nn::Linear first(in, hidden);
+  torch::nn::Linear second(hidden, out);
+  return torch::nn::Sequential(first, torch::nn::ReLU(), second);
 }
 
 GraphEncoderBlockImpl::GraphEncoderBlockImpl(const OwoConfig& config, bool update_edges)

@@ -16,9 +16,16 @@ void require(bool ok, const std::string& message) {
 // Laplace smoothing of the EMA counts, so that a rarely used code is not divided by ~0.
 constexpr double kLaplaceEpsilon = 1e-5;
 
-// `count` rows of `rows` (N, C) drawn with replacement among those with weight (N) > 0.
-at::Tensor sample_rows(const at::Tensor& rows, const at::Tensor& weight, int64_t count) {
-  return rows.index_select(0, torch::multinomial(weight, count, /*replacement=*/true));
+// `count` rows of `rows` (N, C) drawn with replacement, row i with a chance
+// proportional to weight_i (N) times |error_i|^2 (error (N, C)): k-means++ style,
+// so a code is seeded or restarted where the codes so far explain the data worst,
+// not at a residual they already explain (near zero: a duplicate that stays
+// unused). The small floor keeps every kept row possible when all errors are 0.
+at::Tensor sample_rows(const at::Tensor& rows, const at::Tensor& weight, const at::Tensor& error, int64_t count) {
+  // Non-finite errors (a diverging run, stopped by the trainer's loss check) count as 0.
+  const at::Tensor squared = torch::nan_to_num(weight * error.pow(2).sum(1), 0.0, 0.0, 0.0);  // (N), 0 where masked
+  const at::Tensor chance = squared + weight * (1e-6 * squared.max()).clamp_min(1e-12);
+  return rows.index_select(0, torch::multinomial(chance, count, /*replacement=*/true));
 }
 
 }  // namespace
@@ -84,7 +91,7 @@ QuantizerOutput ResidualQuantizerImpl::forward(const at::Tensor& latent, const a
     for (int64_t r = 0; r < used_layers; ++r) {
       at::Tensor codebook = codebooks_[r];  // (K, C) view into the buffer
       if (seed) {
-        codebook.copy_(sample_rows(residual, weight, size));
+        codebook.copy_(sample_rows(residual, weight, residual, size));
         ema_sums_[r].copy_(codebook);
         ema_counts_[r].fill_(1.0);
       }
@@ -109,9 +116,10 @@ QuantizerOutput ResidualQuantizerImpl::forward(const at::Tensor& latent, const a
             (ema_counts_[r] + kLaplaceEpsilon) / (total_count + size * kLaplaceEpsilon) * total_count;
         codebook.copy_(ema_sums_[r] / smoothed.unsqueeze(1));
         if (config_.dead_code_threshold > 0.0) {
-          // Codes used less than the threshold restart at random kept residuals of this layer.
+          // Codes used less than the threshold restart at kept residuals of this layer,
+          // preferring the rows its codes serve worst.
           const at::Tensor dead = (ema_counts_[r] < config_.dead_code_threshold).unsqueeze(1);  // (K, 1)
-          const at::Tensor fresh = sample_rows(residual, weight, size);
+          const at::Tensor fresh = sample_rows(residual, weight, residual - chosen, size);
           codebook.copy_(torch::where(dead, fresh, codebook));
           ema_sums_[r].copy_(torch::where(dead, fresh * config_.dead_code_threshold, ema_sums_[r]));
           ema_counts_[r].masked_fill_(dead.squeeze(1), config_.dead_code_threshold);

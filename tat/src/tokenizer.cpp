@@ -166,8 +166,11 @@ class NecEncoderImpl : public detail::EncoderImpl {
  public:
   explicit NecEncoderImpl(const TatConfig& config) {
     const int64_t d = config.dim;
-    input_ = register_module("input", torch::nn::Sequential(torch::nn::Linear(9, d), torch::nn::ReLU(),
-                                                            torch::nn::Linear(d, d)));
+    // Layers built in order (argument evaluation order is unspecified, and it
+    // decides the random initial weights).
+    torch::nn::Linear first(9, d);
+    torch::nn::Linear second(d, d);
+    input_ = register_module("input", torch::nn::Sequential(first, torch::nn::ReLU(), second));
     embedding_ = register_module("embedding", torch::nn::Linear(config.joint_embedding_dim, d));
     virtual_joint_ = register_parameter("virtual_joint", torch::randn({d}) * 0.02);
     temporal_ = register_module("temporal", torch::nn::ModuleList());

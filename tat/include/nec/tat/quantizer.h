@@ -8,8 +8,10 @@
 //   at::Tensor same = rvq->codes_to_latent(q.codes);  // == q.quantized.detach() (all layers used)
 //
 // Codebooks are EMA-updated (no gradient) in training mode, from the rows the
-// mask keeps; a code whose EMA usage falls below dead_code_threshold is reset
-// to a random kept latent residual. Quantize dropout (training only): with
+// mask keeps. They are seeded from the first training batch, and a code whose EMA
+// usage falls below dead_code_threshold is restarted, both k-means++ style: at kept
+// residuals drawn with a chance proportional to how badly the codes explain them.
+// Quantize dropout (training only): with
 // probability quantize_dropout a batch uses only the first n ~ U{1..R} layers,
 // so early layers learn to carry the coarse motion on their own.
 // A single-codebook VQ is this with layers = 1.
