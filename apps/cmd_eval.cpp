@@ -5,9 +5,10 @@
 namespace nec::app {
 
 int run_eval(int argc, char** argv) {
-  return run_nested("nec eval NAME --data CACHE [options]", "evaluations", "evaluation",
+  return run_nested("nec eval NAME [arguments] [options]", "evaluations", "evaluation",
                     {{"owo", run_eval_owo, "OwO skeleton encoder on skeletons it never saw: LCA accuracy, offsets, tree rebuild"},
-                     {"recon", run_eval_recon, "tokenizer reconstruction error on clips it never trained on"}},
+                     {"recon", run_eval_recon, "tokenizer reconstruction error on clips it never trained on"},
+                     {"transfer", run_eval_transfer, "transferred clips against their sources: speed, heading, feet, bones"}},
                     argc, argv);
 }
 

@@ -22,5 +22,6 @@ int run_decode(int argc, char** argv);
 int run_transfer(int argc, char** argv);
 int run_train_tat(int argc, char** argv);
 int run_eval_recon(int argc, char** argv);
+int run_eval_transfer(int argc, char** argv);
 
 }  // namespace nec::app

@@ -5,7 +5,8 @@
 # MODEL: a checkpoint from `nec train tat`; ZOO_DIR: a folder written by
 # `nec zoo` (seen/ and held_out/ creatures). Human and dog sources come from
 # ../shared/data when present, else from the zoo's biped and quadruped.
-# Writes OUT_DIR/*.bvh and OUT_DIR/transfers.html.
+# Writes OUT_DIR/*.bvh, OUT_DIR/transfers.html and the transfer checks
+# (`nec eval transfer`) in OUT_DIR/transfers.md and transfers.json.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -ne 3 ]; then
@@ -53,4 +54,6 @@ for pair in "${pairs[@]}"; do
   captions+=(--caption "source: $(basename "$source")" --caption "$name (skeleton of $(basename "$target"))")
 done
 "$nec" view "${files[@]}" "${captions[@]}" --max-fps 30 --title "nec transfers" -o "$out/transfers.html"
-echo "open $out/transfers.html"
+# Speed, heading, direction, foot plants and bone lengths of each result against its source.
+"$nec" eval transfer "${files[@]}" --json "$out/transfers.json" --markdown "$out/transfers.md"
+echo "open $out/transfers.html; measurements in $out/transfers.md"

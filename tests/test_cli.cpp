@@ -5,6 +5,7 @@
 #include "test_support.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -92,6 +93,31 @@ TEST_F(Cli, NormalizeAndAugmentWriteReadableFiles) {
     ASSERT_EQ(augmented.exit_code, 0) << kind << ": " << augmented.output;
     EXPECT_EQ(read_bvh(out).motion.frame_count, n.motion.frame_count);
   }
+}
+
+// `nec eval transfer` measures each file in its own body sizes: the CMU clip and
+// its normalized copy (another unit, scale and frame rate) travel alike.
+TEST_F(Cli, EvalTransferComparesPairsInBodySizes) {
+  const std::string normalized = path("n.bvh");
+  ASSERT_EQ(run_nec("normalize " + kCmu + " -o " + normalized).exit_code, 0);
+  const std::string json_path = path("check.json");
+  const CommandResult run = run_nec("eval transfer " + kCmu + " " + normalized + " --json " + json_path);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("| speed src / out (sizes/s) | ratio |"), std::string::npos) << run.output;
+  const nlohmann::json check = nlohmann::json::parse(read_file(json_path)).at(0);
+  EXPECT_NEAR(check["speed_ratio"].get<double>(), 1.0, 0.02) << check.dump(1);
+  EXPECT_NEAR(check["heading_difference_deg"].get<double>(), 0.0, 1.0);
+  EXPECT_LT(check["output_measurements"]["bone_length_change"].get<double>(), 1e-3);
+  EXPECT_GT(check["source_measurements"]["speed"].get<double>(), 0.1);
+
+  const CommandResult odd = run_nec("eval transfer " + kCmu);
+  EXPECT_EQ(odd.exit_code, 2);
+  EXPECT_NE(odd.output.find("give pairs"), std::string::npos) << odd.output;
+  const std::string unwritten = path("never.json");
+  const CommandResult missing = run_nec("eval transfer " + kCmu + " " + path("gone.bvh") + " --json " + unwritten);
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.output.find("gone.bvh"), std::string::npos) << missing.output;
+  EXPECT_FALSE(fs::exists(unwritten));
 }
 
 TEST_F(Cli, ViewWritesAStripAndRejectsBadArguments) {

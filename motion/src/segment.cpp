@@ -60,12 +60,16 @@ BodyLayout find_body_layout(const Skeleton& skeleton) {
   }
   // First sided joint of each limb: its parent has no side.
   const auto limb_start = [&](int j) { return skeleton.parents[j] < 0 || sides[skeleton.parents[j]] == Side::None; };
+  // Each right limb pairs once: limbs with the same canonical name (the legs of a
+  // spider) pair in file order, not all with the first right one (a diagonal).
+  std::vector<bool> paired(joint_count, false);
   for (int left = 0; left < joint_count; ++left) {
     if (sides[left] != Side::Left || !limb_start(left)) continue;
     const std::string mirrored = mirrored_canonical_name(canonical[left]);
     for (int right = 0; right < joint_count; ++right) {
-      if (sides[right] == Side::Right && limb_start(right) && canonical[right] == mirrored) {
+      if (!paired[right] && sides[right] == Side::Right && limb_start(right) && canonical[right] == mirrored) {
         layout.side_pairs.emplace_back(left, right);
+        paired[right] = true;
         break;
       }
     }
@@ -94,20 +98,32 @@ Vec3 horizontal(Vec3 v) {
   return v;
 }
 
+// The head decides which way a body faces only where its horizontal distance to
+// the root exceeds this many times the mean left-right width of the limb pairs.
+constexpr double kHeadReachForFacing = 0.5;
+
 // Facing direction (horizontal, not normalized) of every frame.
 std::vector<Vec3> facing_directions(const Pose& pose, const BodyLayout& layout, std::string& source) {
   const int frame_count = pose.frame_count;
   std::vector<Vec3> facing(static_cast<size_t>(frame_count), Vec3::Zero());
   if (!layout.side_pairs.empty()) {
     source = "left/right joints";
-    double agreement = 0.0;  // with the head direction: negative means sides are swapped in the names
+    // Agreement with the head direction: negative means sides are swapped in the
+    // names. Trusted only where the head sits clearly ahead of the root (a dog,
+    // not an upright person, whose head may lean behind the hips).
+    double agreement = 0.0, head_reach = 0.0, width = 0.0;
     for (int t = 0; t < frame_count; ++t) {
       Vec3 left = Vec3::Zero();
       for (const auto& [l, r] : layout.side_pairs) left += pose.position(t, l) - pose.position(t, r);
       facing[t] = Vec3(-left.z(), 0.0, left.x());  // left × up
-      if (layout.head >= 0) agreement += facing[t].dot(horizontal(pose.position(t, layout.head) - pose.position(t, 0)));
+      width += facing[t].norm() / static_cast<double>(layout.side_pairs.size());
+      if (layout.head >= 0) {
+        const Vec3 head = horizontal(pose.position(t, layout.head) - pose.position(t, 0));
+        agreement += facing[t].dot(head);
+        head_reach += head.norm();
+      }
     }
-    if (agreement < 0.0) {
+    if (agreement < 0.0 && head_reach > kHeadReachForFacing * width) {
       for (auto& f : facing) f = -f;
     }
   } else if (layout.head >= 0) {

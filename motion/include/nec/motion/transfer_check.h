@@ -1,0 +1,58 @@
+// What can be checked without a human when a motion is moved onto another
+// skeleton (`nec transfer`): does the target travel as fast as the source
+// relative to its own size, turn as much, head the same way, put its feet down
+// in a rhythm, and keep its bones at their lengths?
+//
+//   const Clip source = preprocess(read_bvh("human_walk.bvh"), "human_walk.bvh").clip;
+//   const Clip output = preprocess(read_bvh("dog_walk.bvh"), "dog_walk.bvh").clip;
+//   TransferCheck check = check_transfer(source, output);
+//   check.speed_ratio;            // 1: as many body sizes per second as the source
+//   check.output.gait.touchdowns_per_second;  // > 0: feet are put down
+//
+// Both clips are expected with +Y up, as `preprocess` leaves them. Sizes are Skeleton::diameter() ("body sizes"), whatever the units.
+#pragma once
+
+#include "nec/motion/motion.h"
+
+namespace nec {
+
+struct GaitMeasurements {
+  int feet = 0;                       // leaf joints that spend time near the ground
+  double contact_fraction = 0.0;      // share of (frame, foot) pairs with the foot planted
+  double touchdowns_per_second = 0.0; // foot plants (of all feet together) per second
+};
+
+struct MotionMeasurements {
+  double seconds = 0.0;
+  double speed = 0.0;           // mean horizontal root speed, body sizes/s
+  double distance = 0.0;        // net horizontal root displacement, body sizes
+  double heading_change = 0.0;  // degrees, + = left (counter-clockwise seen from +Y)
+  // Degrees from the mean facing to the net root displacement: 0 forward, 90 to
+  // the left, 180 backward; NaN if the displacement is under kMinTravel.
+  double travel_direction = 0.0;
+  GaitMeasurements gait;
+  double bone_length_change = 0.0;  // largest |bone length - rest length| over frames and bones, body sizes
+};
+
+// Under this net displacement (body sizes) a clip has no direction of travel.
+inline constexpr double kMinTravel = 0.1;
+
+// Foot contact: a leaf joint below kContactHeight body sizes above the floor (the
+// lowest point the clip's joints reach) moving slower than kContactSpeed body
+// sizes per second; a plant must last two frames to count.
+inline constexpr double kContactHeight = 0.04;
+inline constexpr double kContactSpeed = 0.3;
+
+// Throws std::invalid_argument for a clip without frames or with fps <= 0.
+MotionMeasurements measure_motion(const Clip& clip);
+
+struct TransferCheck {
+  MotionMeasurements source, output;
+  double speed_ratio = 0.0;          // output.speed / source.speed; NaN if the source stands still
+  double heading_difference = 0.0;   // output - source heading change, degrees
+  double direction_difference = 0.0; // output - source travel direction, degrees in (-180, 180]; NaN if either has none
+};
+
+TransferCheck check_transfer(const Clip& source, const Clip& output);
+
+}  // namespace nec

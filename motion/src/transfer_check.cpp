@@ -1,0 +1,113 @@
+// Transfer checks: speed, heading, direction, foot plants and bone lengths of a clip.
+#include "nec/motion/transfer_check.h"
+
+#include "nec/motion/kinematics.h"
+#include "nec/motion/segment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+namespace nec {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+constexpr double kDegreesPerRadian = 180.0 / M_PI;
+
+// Angle a - b wrapped into (-180, 180].
+double wrapped_difference(double a, double b) {
+  double d = std::fmod(a - b, 360.0);
+  if (d <= -180.0) d += 360.0;
+  if (d > 180.0) d -= 360.0;
+  return d;
+}
+
+GaitMeasurements measure_gait(const Clip& clip, double size) {
+  const Motion& m = clip.motion;
+  const int frames = m.frame_count, joints = m.joint_count;
+  std::vector<Vec3> positions;
+  joint_positions(clip.skeleton, m, positions);
+  auto at = [&](int t, int j) -> const Vec3& { return positions[static_cast<size_t>(t) * joints + j]; };
+  double floor = std::numeric_limits<double>::infinity();
+  for (const Vec3& p : positions) floor = std::min(floor, p.y());
+
+  GaitMeasurements gait;
+  if (frames < 3) return gait;
+  long planted = 0, touchdowns = 0;
+  for (const int leaf : clip.skeleton.leaves()) {
+    std::vector<bool> contact(frames);
+    for (int t = 0; t < frames; ++t) {
+      // Centred difference (one-sided at the ends), horizontal only.
+      const int a = std::max(0, t - 1), b = std::min(frames - 1, t + 1);
+      Vec3 step = at(b, leaf) - at(a, leaf);
+      step.y() = 0.0;
+      const double speed = step.norm() / ((b - a) / m.fps) / size;
+      contact[t] = (at(t, leaf).y() - floor) / size < kContactHeight && speed < kContactSpeed;
+    }
+    const long frames_planted = std::count(contact.begin(), contact.end(), true);
+    if (frames_planted == 0) continue;
+    ++gait.feet;
+    planted += frames_planted;
+    for (int t = 0; t + 1 < frames; ++t) {
+      if (contact[t] && contact[t + 1] && (t == 0 || !contact[t - 1])) ++touchdowns;
+    }
+  }
+  if (gait.feet > 0) gait.contact_fraction = static_cast<double>(planted) / (static_cast<double>(gait.feet) * frames);
+  gait.touchdowns_per_second = touchdowns / m.duration_seconds();
+  return gait;
+}
+
+}  // namespace
+
+MotionMeasurements measure_motion(const Clip& clip) {
+  const Motion& m = clip.motion;
+  if (m.frame_count < 1) throw std::invalid_argument("measure_motion: the clip has no frames");
+  if (!(m.fps > 0.0)) throw std::invalid_argument("measure_motion: fps must be positive");
+  const double size = clip.skeleton.diameter();
+  MotionMeasurements out;
+  out.seconds = m.duration_seconds();
+
+  const KinematicSignals signals = measure_kinematics(clip);
+  double facing_x = 0.0, facing_z = 0.0;  // mean facing direction
+  for (int t = 0; t < signals.frame_count(); ++t) {
+    out.speed += signals.speed[t] / signals.frame_count();
+    facing_x += std::sin(signals.heading[t] / kDegreesPerRadian);
+    facing_z += std::cos(signals.heading[t] / kDegreesPerRadian);
+  }
+  out.heading_change = signals.heading.back() - signals.heading.front();
+  const Vec3 first = m.translation(0, 0), last = m.translation(m.frame_count - 1, 0);
+  const double dx = last.x() - first.x(), dz = last.z() - first.z();
+  out.distance = std::hypot(dx, dz) / size;
+  // The net displacement against the mean facing: a swaying body or a turn (whose
+  // chord points along its mean facing) does not count.
+  out.travel_direction = out.distance < kMinTravel ? kNaN
+                                                   : wrapped_difference(kDegreesPerRadian * std::atan2(dx, dz),
+                                                                        kDegreesPerRadian * std::atan2(facing_x, facing_z));
+
+  out.gait = measure_gait(clip, size);
+
+  const std::vector<double> rest = clip.skeleton.bone_lengths();
+  for (int t = 0; t < m.frame_count; ++t) {
+    for (int j = 1; j < m.joint_count; ++j) {
+      out.bone_length_change = std::max(out.bone_length_change, std::abs(m.translation(t, j).norm() - rest[j]) / size);
+    }
+  }
+  return out;
+}
+
+TransferCheck check_transfer(const Clip& source, const Clip& output) {
+  TransferCheck check;
+  check.source = measure_motion(source);
+  check.output = measure_motion(output);
+  check.speed_ratio = check.source.speed > 1e-9 ? check.output.speed / check.source.speed : kNaN;
+  check.heading_difference = check.output.heading_change - check.source.heading_change;
+  check.direction_difference = std::isnan(check.source.travel_direction) || std::isnan(check.output.travel_direction)
+                                   ? kNaN
+                                   : wrapped_difference(check.output.travel_direction, check.source.travel_direction);
+  return check;
+}
+
+}  // namespace nec
