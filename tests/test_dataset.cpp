@@ -365,6 +365,17 @@ TEST(DatasetSplits, DeterministicAndIndependentOfEntryOrder) {
   }
   EXPECT_EQ(split_by_id(build_cache(reversed, options)), split_by_id(first));
 
+  // The folder the files were named from does not matter: only the path below
+  // the folder that holds a dataset's files does.
+  std::vector<CacheEntry> elsewhere = entries;
+  for (CacheEntry& e : elsewhere) {
+    e.source = "/home/someone/corpus/" + e.source;
+    if (!e.id.empty()) e.id = "/home/someone/corpus/" + e.id;
+  }
+  const DatasetCache moved = build_cache(elsewhere, options);
+  ASSERT_EQ(moved.clip_count(), first.clip_count());
+  for (int i = 0; i < first.clip_count(); ++i) EXPECT_EQ(moved.clips[i].split, first.clips[i].split) << i;
+
   // Another seed, another split.
   options.split.seed = 12;
   EXPECT_NE(split_by_id(build_cache(entries, options)), split_by_id(first));

@@ -390,11 +390,20 @@ void check_fraction(double value, const char* name) {
   }
 }
 
-// Where a source goes among the non-held-out sources: a hash of (seed, source).
-uint64_t source_rank(uint64_t seed, const std::string& source) {
+// Where a source goes among the non-held-out sources: a hash of (seed, key).
+uint64_t source_rank(uint64_t seed, const std::string& key) {
   char seed_bytes[8];
   for (int i = 0; i < 8; ++i) seed_bytes[i] = static_cast<char>(seed >> (8 * i));
-  return mix64(fnv1a(source, fnv1a(std::string_view(seed_bytes, 8))));
+  return mix64(fnv1a(key, fnv1a(std::string_view(seed_bytes, 8))));
+}
+
+// The longest leading folder ("a/b/") of two folder paths that end with '/'.
+std::string shared_folder(const std::string& a, const std::string& b) {
+  size_t same = 0;
+  while (same < a.size() && same < b.size() && a[same] == b[same]) ++same;
+  if (same == 0) return "";
+  const size_t slash = a.rfind('/', same - 1);
+  return slash == std::string::npos ? "" : a.substr(0, slash + 1);
 }
 
 std::string list_for_message(const std::vector<std::string>& names) {
@@ -569,6 +578,18 @@ std::vector<Split> assign_splits(const DatasetCache& cache, const SplitOptions& 
   std::map<std::string, std::vector<int>> groups;
   for (int i = 0; i < cache.clip_count(); ++i) groups[cache.clips[i].source].push_back(i);
 
+  // A source ranks by its dataset and its path below the folder that holds all of
+  // that dataset's files, so that "../data/dog" and "/home/me/data/dog" split alike.
+  std::map<std::string, std::string> common_folder;  // per dataset, ends with '/' or is empty
+  for (const CacheClip& clip : cache.clips) {
+    const std::string folder = clip.source.substr(0, clip.source.rfind('/') + 1);
+    const auto [it, inserted] = common_folder.emplace(clip.dataset, folder);
+    if (!inserted) it->second = shared_folder(it->second, folder);
+  }
+  auto rank_key = [&](const CacheClip& clip) {
+    return clip.dataset + ":" + clip.source.substr(common_folder.at(clip.dataset).size());
+  };
+
   std::vector<Split> splits(cache.clips.size(), Split::Train);
   struct Ranked {
     uint64_t rank;
@@ -582,7 +603,7 @@ std::vector<Split> assign_splits(const DatasetCache& cache, const SplitOptions& 
     if (held_out) {
       for (int i : members) splits[i] = Split::Test;
     } else {
-      free_groups.push_back({source_rank(options.seed, source), &source, &members});
+      free_groups.push_back({source_rank(options.seed, rank_key(cache.clips[members.front()])), &source, &members});
       free_clips += members.size();
     }
   }
