@@ -3,6 +3,7 @@
 # creatures plus Debian's CMU motion capture (and ../shared/data when present)
 # become one dataset cache; normalized and augmented BVH, PNG strips and viewer
 # pages are written to out/demo/ (open out/demo/index.html in a browser).
+# NEC_TAT_MODEL=CKPT adds five transfers with that tokenizer (see the end).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
@@ -19,3 +20,14 @@ echo "== a real file: nec info"
 echo
 echo "== nec demo ${extra[*]}"
 "$nec" demo "${extra[@]}"
+
+# With a trained tokenizer (NEC_TAT_MODEL=runs/tat bash scripts/demo.sh): five
+# cross-species transfers, a page showing each next to its source, and the
+# transfer checks (speed, heading, feet, bones) in out/demo/transfers/.
+if [ -n "${NEC_TAT_MODEL:-}" ]; then
+  echo
+  echo "== transfers with $NEC_TAT_MODEL"
+  "$nec" zoo --out out/demo/transfer_zoo --creatures 9 --clips-per-creature 4 --seed 1 --quiet
+  scripts/transfers.sh "$NEC_TAT_MODEL" out/demo/transfer_zoo out/demo/transfers
+  cat out/demo/transfers/transfers.md
+fi
