@@ -193,8 +193,12 @@ int run_nested(const std::string& usage, const std::string& list_title, const st
                const std::vector<NestedCommand>& commands, int argc, char** argv) {
   if (argc < 1 || std::strcmp(argv[0], "--help") == 0 || std::strcmp(argv[0], "-h") == 0) {
     fmt::print("usage: {}\n\n{}:\n", usage, list_title);
-    for (const NestedCommand& c : commands) fmt::print("  {:<6} {}\n", c.name, c.summary);
-    const std::string command = usage.substr(0, usage.find(" -"));  // "nec train MODEL"
+    size_t width = 0;
+    for (const NestedCommand& c : commands) width = std::max(width, std::string(c.name).size());
+    for (const NestedCommand& c : commands) fmt::print("  {:<{}} {}\n", c.name, width, c.summary);
+    size_t words_end = 0;  // after the first three words: "nec train MODEL"
+    for (int word = 0; word < 3 && words_end != std::string::npos; ++word) words_end = usage.find(' ', words_end + 1);
+    const std::string command = usage.substr(0, words_end);
     fmt::print("\n`{} --help` shows its options and defaults.\n", command);
     return argc < 1 ? 2 : 0;
   }
