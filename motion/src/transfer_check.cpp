@@ -51,8 +51,9 @@ GaitMeasurements measure_gait(const Clip& clip, double size) {
     if (frames_planted == 0) continue;
     ++gait.feet;
     planted += frames_planted;
-    for (int t = 0; t + 1 < frames; ++t) {
-      if (contact[t] && contact[t + 1] && (t == 0 || !contact[t - 1])) ++touchdowns;
+    // A foot already down at the first frame has not touched down.
+    for (int t = 1; t + 1 < frames; ++t) {
+      if (contact[t] && contact[t + 1] && !contact[t - 1]) ++touchdowns;
     }
   }
   if (gait.feet > 0) gait.contact_fraction = static_cast<double>(planted) / (static_cast<double>(gait.feet) * frames);
