@@ -1,7 +1,7 @@
 // TAT checkpoints: a trained tokenizer together with the frozen OwO encoder it
 // was trained with, so one directory is all `nec encode|decode|transfer` need.
 //
-//   <dir>/config.json   {"format": "nec-tat", "version": 1, "architecture": "Tokenizer",
+//   <dir>/config.json   {"format": "nec-tat", "version": 2, "architecture": "Tokenizer",
 //                        "tokenizer": TatConfig, "window_frames": 64, "fps": 30,
 //                        "training_step": 4000, "data": "cache/ (1,036 clips)",
 //                        "training": {... free-form state for --resume ...},
@@ -29,7 +29,7 @@ class Optimizer;
 namespace nec::tat {
 
 constexpr const char* kTatCheckpointFormat = "nec-tat";
-constexpr int kTatCheckpointVersion = 1;
+constexpr int kTatCheckpointVersion = 2;  // 2: the encoder scales the root displacement up (tokenizer.cpp)
 
 struct TatCheckpointInfo {
   int64_t window_frames = 64;   // training window T, e.g. 64; inference uses windows of this size
