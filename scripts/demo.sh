@@ -29,5 +29,4 @@ if [ -n "${NEC_TAT_MODEL:-}" ]; then
   echo "== transfers with $NEC_TAT_MODEL"
   "$nec" zoo --out out/demo/transfer_zoo --creatures 9 --clips-per-creature 4 --seed 1 --quiet
   scripts/transfers.sh "$NEC_TAT_MODEL" out/demo/transfer_zoo out/demo/transfers
-  cat out/demo/transfers/transfers.md
 fi
