@@ -2,8 +2,6 @@
 #include "command_line.h"
 #include "commands.h"
 
-#include "nec/motion/bvh.h"
-#include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/motion/preprocess.h"
 #include "nec/motion/transfer_check.h"
@@ -23,9 +21,7 @@ using nlohmann::json;
 Clip prepared(const std::string& path, UpAxis up) {
   PreprocessOptions options;
   options.up = up;  // resampled to the corpus rate, +Y up, unit diameter: both files measured alike
-  PreparedClip p = preprocess(read_bvh(path), path, options);
-  if (!p.report.accepted()) throw InputError(path, 0, "rejected by preprocessing: " + p.report.rejection);
-  return std::move(p.clip);
+  return preprocess_file(path, options).clip;
 }
 
 // NaN (no direction, a source standing still) is JSON null and "-" in the table.

@@ -3,9 +3,6 @@
 
 #include "torch_runtime.h"
 
-#include "nec/motion/bvh.h"
-#include "nec/motion/error.h"
-
 #include <torch/torch.h>
 
 #include <cmath>
@@ -72,9 +69,7 @@ PreparedClip prepare_for_model(const std::string& path, double fps, UpAxis up) {
   PreprocessOptions options;
   options.target_fps = fps;
   options.up = up;
-  PreparedClip prepared = preprocess(read_bvh(path), path, options);
-  if (!prepared.report.accepted()) throw InputError(path, 0, "rejected by preprocessing: " + prepared.report.rejection);
-  return prepared;
+  return preprocess_file(path, options);
 }
 
 double heading_degrees(const Normalization& n) {

@@ -2,6 +2,8 @@
 // +Y up, frame 0 facing +Z, corpus frame rate.
 #include "nec/motion/preprocess.h"
 
+#include "nec/motion/bvh.h"
+#include "nec/motion/error.h"
 #include "nec/motion/kinematics.h"
 #include "nec/motion/names.h"
 
@@ -344,6 +346,12 @@ PreparedClip preprocess(const Clip& raw, const std::string& file, const Preproce
     }
   }
   return out;
+}
+
+PreparedClip preprocess_file(const std::string& path, const PreprocessOptions& options) {
+  PreparedClip prepared = preprocess(read_bvh(path), path, options);
+  if (!prepared.report.accepted()) throw InputError(path, 0, "rejected by preprocessing: " + prepared.report.rejection);
+  return prepared;
 }
 
 }  // namespace nec

@@ -53,6 +53,9 @@ struct PreparedClip {
 };
 
 PreparedClip preprocess(const Clip& raw, const std::string& file, const PreprocessOptions& options = {});
+// Reads a BVH file and preprocesses it; a file that preprocessing rejects
+// throws nec::InputError naming the file and the reason.
+PreparedClip preprocess_file(const std::string& path, const PreprocessOptions& options = {});
 
 // Individual steps, usable on their own (each appends to `report`).
 // Step 1: the root is a dummy outside the body (named like root/reference or
