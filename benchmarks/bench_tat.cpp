@@ -184,13 +184,21 @@ double train_step(Trainee& t) {
   return loss.total.item<double>();
 }
 
-Trainee& trainee(int64_t joints) {
-  static std::map<int64_t, std::unique_ptr<Trainee>> cache;
-  std::unique_ptr<Trainee>& slot = cache[joints];
-  if (slot) return *slot;
+// The T of a joint count, made by build(T&, joints) on first use and kept for
+// every later benchmark of that size.
+template <typename T, typename Build>
+T& per_joint_count(int64_t joints, Build build) {
+  static std::map<int64_t, std::unique_ptr<T>> made;
+  std::unique_ptr<T>& slot = made[joints];
+  if (!slot) {
+    slot = std::make_unique<T>();
+    build(*slot, joints);
+  }
+  return *slot;
+}
+
+void build_trainee(Trainee& t, int64_t joints) {
   const nec::tat::TatTrainConfig& config = train_config();
-  slot = std::make_unique<Trainee>();
-  Trainee& t = *slot;
   const int threads = torch::get_num_threads();
   torch::set_num_threads(1);
   torch::manual_seed(kSeed);
@@ -202,8 +210,9 @@ Trainee& trainee(int64_t joints) {
   for (int64_t i = 0; i < kWarmupSteps; ++i) t.first_losses.push_back(train_step(t));
   t.memory = measure_peak_rss([&] { benchmark::DoNotOptimize(train_step(t)); });
   torch::set_num_threads(threads);
-  return t;
 }
+
+Trainee& trainee(int64_t joints) { return per_joint_count<Trainee>(joints, build_trainee); }
 
 void BM_TatTrainStep(benchmark::State& state) {
   const int64_t joints = state.range(0);
@@ -230,13 +239,8 @@ struct Clip {
 
 nec::tat::WindowOptions windows() { return {train_config().window_frames, 16}; }
 
-Clip& clip(int64_t joints) {
-  static std::map<int64_t, std::unique_ptr<Clip>> cache;
-  std::unique_ptr<Clip>& slot = cache[joints];
-  if (slot) return *slot;
+void build_clip(Clip& c, int64_t joints) {
   const nec::tat::TatTrainConfig& config = train_config();
-  slot = std::make_unique<Clip>();
-  Clip& c = *slot;
   torch::manual_seed(kSeed);
   const at::Tensor theta = random_features(1, kClipFrames, joints)[0].contiguous();
   c.features.frame_count = static_cast<int>(kClipFrames);
@@ -246,8 +250,9 @@ Clip& clip(int64_t joints) {
   c.model = Tokenizer(config.model);
   c.model->eval();
   c.codes = nec::tat::encode_clip(*c.model, c.features, c.embeddings, windows());
-  return c;
 }
+
+Clip& clip(int64_t joints) { return per_joint_count<Clip>(joints, build_clip); }
 
 void BM_TatEncodeClip(benchmark::State& state) {
   torch::set_num_threads(static_cast<int>(state.range(1)));
