@@ -145,7 +145,9 @@ int run_train_owo(int argc, char** argv) {
   schedule.log_every = config.log_every;
   schedule.validate_every = trainer.skeletons().held_out.empty() ? 0 : config.validate_every;
   schedule.checkpoint_every = config.checkpoint_every;
+  const InterruptSignals signals;
   TrainingHooks hooks;
+  hooks.interrupted = [&] { return signals.received(); };
   hooks.step = [&](int64_t step) { return step_terms(trainer.step(step)); };
   hooks.validate = [&](int64_t) {
     const owo::ScoreSummary held_out = owo::summarize(trainer.score_held_out());
@@ -158,8 +160,8 @@ int run_train_owo(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   ProgressReporter progress(stdout, isatty(fileno(stdout)) != 0);
   const TrainingOutcome outcome = run_training(schedule, start_step, out, hooks, progress);
-  if (outcome.stopped) {
-    fmt::print(stderr, "nec: error: {}\n", outcome.message);
+  if (outcome.stopped || outcome.interrupted) {
+    fmt::print(stderr, "nec: {}{}\n", outcome.stopped ? "error: " : "", outcome.message);
     return outcome.exit_code();
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -149,7 +149,9 @@ int run_train_tat(int argc, char** argv) {
   schedule.log_every = config.log_every;
   schedule.validate_every = validation ? config.validate_every : 0;
   schedule.checkpoint_every = config.checkpoint_every;
+  const InterruptSignals signals;
   TrainingHooks hooks;
+  hooks.interrupted = [&] { return signals.received(); };
   hooks.step = [&](int64_t step) {
     const std::map<std::string, double> terms = trainer.step(train.next(), step - 1);
     LossTerms out;
@@ -182,8 +184,8 @@ int run_train_tat(int argc, char** argv) {
   };
   ProgressReporter progress(stdout, isatty(fileno(stdout)) != 0);
   const TrainingOutcome outcome = run_training(schedule, start_step, out_dir, hooks, progress);
-  if (outcome.stopped) {
-    fmt::print(stderr, "nec: error: {}\n", outcome.message);
+  if (outcome.stopped || outcome.interrupted) {
+    fmt::print(stderr, "nec: {}{}\n", outcome.stopped ? "error: " : "", outcome.message);
     return outcome.exit_code();
   }
   fmt::print("wrote {} (step {})\n", out_dir, outcome.last_step);

@@ -3,12 +3,23 @@
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <stdexcept>
 
 namespace nec::app {
 namespace {
 
 constexpr double kRedrawSeconds = 0.2;  // least time between two redraws of the terminal line
+
+volatile std::sig_atomic_t g_interrupt_received = 0;
+bool g_interrupt_installed = false;
+void (*g_previous_sigint)(int) = SIG_DFL;
+void (*g_previous_sigterm)(int) = SIG_DFL;
+
+extern "C" void on_interrupt(int signal_number) {
+  g_interrupt_received = 1;
+  std::signal(signal_number, SIG_DFL);
+}
 
 bool every(int64_t period, int64_t step) { return period > 0 && step % period == 0; }
 
@@ -166,14 +177,40 @@ TrainingOutcome run_training(const TrainingSchedule& schedule, int64_t start_ste
       const LossTerms metrics = hooks.validate(step);
       progress.line("validation at step " + std::to_string(step) + ": " + format_terms(metrics));
     }
-    if (hooks.checkpoint && schedule.checkpoints_at(step)) {
+    const bool interrupted = hooks.interrupted && hooks.interrupted();
+    if (hooks.checkpoint && (schedule.checkpoints_at(step) || interrupted)) {
       hooks.checkpoint(step);
       outcome.last_checkpoint_step = step;
       progress.line("checkpoint at step " + std::to_string(step) + ": " + checkpoint_dir);
+    }
+    if (interrupted && step < schedule.total_steps) {
+      progress.finish();
+      outcome.interrupted = true;
+      outcome.message = "interrupted at step " + std::to_string(step) + " of " + std::to_string(schedule.total_steps) +
+                        (hooks.checkpoint ? "; checkpoint written to " + checkpoint_dir +
+                                                "; run the same command with --resume to go on"
+                                          : "");
+      return outcome;
     }
   }
   progress.finish();
   return outcome;
 }
+
+InterruptSignals::InterruptSignals() {
+  if (g_interrupt_installed) throw std::logic_error("InterruptSignals: one is installed already");
+  g_interrupt_installed = true;
+  g_interrupt_received = 0;
+  g_previous_sigint = std::signal(SIGINT, on_interrupt);
+  g_previous_sigterm = std::signal(SIGTERM, on_interrupt);
+}
+
+InterruptSignals::~InterruptSignals() {
+  std::signal(SIGINT, g_previous_sigint);
+  std::signal(SIGTERM, g_previous_sigterm);
+  g_interrupt_installed = false;
+}
+
+bool InterruptSignals::received() const { return g_interrupt_received != 0; }
 
 }  // namespace nec::app

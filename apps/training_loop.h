@@ -22,7 +22,9 @@
 // A checkpoint is written every checkpoint_every steps and after the last
 // step (once when both fall together); validation likewise. When a step
 // returns a NaN or infinite term, nothing more runs and no checkpoint is
-// written: the last one on disk stays the newest good model.
+// written: the last one on disk stays the newest good model. When the
+// `interrupted` hook says so (Ctrl-C, see InterruptSignals), the step under
+// way ends, a checkpoint is written and training stops: --resume goes on.
 #pragma once
 
 #include <cstdint>
@@ -103,15 +105,32 @@ struct TrainingHooks {
   std::function<LossTerms(int64_t step)> step;      // one optimizer step; returns its terms
   std::function<LossTerms(int64_t step)> validate;  // validation metrics, printed as a line
   std::function<void(int64_t step)> checkpoint;     // writes a checkpoint at `step`
+  std::function<bool()> interrupted;                // asked after every step: true = checkpoint and stop
 };
 
 struct TrainingOutcome {
   int64_t last_step = 0;              // the last step completed (the start step when none ran)
   int64_t last_checkpoint_step = -1;  // step of the newest checkpoint, -1 when there is none
   bool stopped = false;               // a loss term was NaN or infinite
+  bool interrupted = false;           // the interrupted hook said stop (after a checkpoint)
   std::string message;                // why it stopped: "training stopped at step 7: loss term 'lca' is nan; ..."
 
-  int exit_code() const { return stopped ? 1 : 0; }
+  // 1 after a non-finite loss, 130 (as a shell reports SIGINT) when interrupted, else 0.
+  int exit_code() const { return stopped ? 1 : (interrupted ? 130 : 0); }
+};
+
+// While one exists, SIGINT and SIGTERM do not end the process but set a flag
+// that training polls between steps; the first signal also restores the
+// default action, so a second Ctrl-C ends the process at once. The previous
+// handlers come back when it goes. One at a time per process.
+class InterruptSignals {
+ public:
+  InterruptSignals();
+  ~InterruptSignals();
+  InterruptSignals(const InterruptSignals&) = delete;
+  InterruptSignals& operator=(const InterruptSignals&) = delete;
+
+  bool received() const;
 };
 
 // Runs steps start_step + 1 ... schedule.total_steps (none when start_step

@@ -4,6 +4,7 @@
 #include "nec/motion/preprocess.h"
 #include "nec/tat/loss.h"
 #include "nec/tat/tokenizer.h"
+#include "nec/tat/training.h"
 #include "nec/zoo/creature.h"
 #include "nec/zoo/motion_synthesis.h"
 #include "test_support.h"
@@ -261,6 +262,42 @@ TEST(TatTokenizer, EveryParameterGetsAGradient) {
     for (const auto& p : model->named_parameters()) {
       ASSERT_TRUE(p.value().grad().defined()) << tat::to_string(kind) << " " << p.key();
       EXPECT_GT(p.value().grad().abs().sum().item<double>(), 0.0) << tat::to_string(kind) << " " << p.key();
+    }
+  }
+}
+
+TEST(TatTokenizer, ItemsPerPartKeepsEachPassWithinTheBudget) {
+  EXPECT_EQ(tat::items_per_part(8, 100, 0), 8);     // no limit: one pass
+  EXPECT_EQ(tat::items_per_part(8, 100, 350), 3);   // 3 × 100 <= 350 < 4 × 100
+  EXPECT_EQ(tat::items_per_part(8, 100, 50), 1);    // one item is the least
+  EXPECT_EQ(tat::items_per_part(8, 100, 5000), 8);  // never more than the batch
+}
+
+// Gradients of a batch run in parts add up to those of the whole batch (eval
+// mode: no codebook updates between the parts; equal masks: equal shares).
+TEST(TatTokenizer, BackwardInPartsGivesTheWholeBatchGradients) {
+  std::mt19937 rng(8);
+  const RandomBatch x = random_batch(rng, {7, 7, 7, 7}, 16);
+  for (TokenizerKind kind : kAllKinds) {
+    const at::Tensor embeddings = kind == TokenizerKind::ZeroPadRvq ? at::Tensor() : x.embeddings;
+    auto gradients_and_loss = [&](int64_t max_joint_frames) {
+      torch::manual_seed(8);
+      tat::Tokenizer model(small_config(kind));
+      model->eval();
+      const tat::LossTerms terms = tat::backward_in_parts(model, x.batch, embeddings, {}, max_joint_frames);
+      std::vector<at::Tensor> gradients;
+      for (const at::Tensor& p : model->parameters()) gradients.push_back(p.grad().clone());
+      return std::make_pair(gradients, terms.at("loss"));
+    };
+    const auto [whole, whole_loss] = gradients_and_loss(0);
+    const auto [parts, parts_loss] = gradients_and_loss(16 * 7);  // one item per pass
+    EXPECT_NEAR(parts_loss, whole_loss, 1e-5 * std::abs(whole_loss)) << tat::to_string(kind);
+    ASSERT_EQ(parts.size(), whole.size());
+    for (size_t i = 0; i < whole.size(); ++i) {
+      EXPECT_TRUE(torch::allclose(parts[i], whole[i], 1e-3, 1e-6))
+          << tat::to_string(kind) << " parameter " << i << ": max difference "
+          << (parts[i] - whole[i]).abs().max().item<double>() << ", largest gradient "
+          << whole[i].abs().max().item<double>();
     }
   }
 }

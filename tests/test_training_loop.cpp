@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <limits>
 #include <string>
@@ -186,6 +187,58 @@ TEST(TrainingLoop, ResumeStartsAfterTheCheckpointStep) {
   run_training(schedule(50, 0, 0, 20), 30, "runs/owo", resumed.hooks(), progress);
   EXPECT_EQ(resumed.steps.size(), 20u);
   EXPECT_EQ(resumed.checkpoints, (std::vector<int64_t>{40, 50}));
+}
+
+TEST(TrainingLoop, InterruptionCheckpointsTheStepAndStops) {
+  CapturedOutput out;
+  ProgressReporter progress(out.file(), false);
+  Recorder recorder;
+  TrainingHooks hooks = recorder.hooks();
+  hooks.interrupted = [&] { return recorder.steps.back() >= 7; };
+  const TrainingOutcome outcome = run_training(schedule(20, 0, 0, 5), 0, "runs/tat", hooks, progress);
+  EXPECT_TRUE(outcome.interrupted);
+  EXPECT_FALSE(outcome.stopped);
+  EXPECT_EQ(outcome.exit_code(), 130);
+  EXPECT_EQ(outcome.last_step, 7);
+  EXPECT_EQ(outcome.last_checkpoint_step, 7);
+  EXPECT_EQ(recorder.steps.back(), 7);
+  EXPECT_EQ(recorder.checkpoints, (std::vector<int64_t>{5, 7}));
+  EXPECT_EQ(outcome.message,
+            "interrupted at step 7 of 20; checkpoint written to runs/tat; run the same command with --resume to go on");
+
+  // On a checkpoint step it is written once; on the last step the run simply ends.
+  Recorder on_cadence;
+  TrainingHooks cadence_hooks = on_cadence.hooks();
+  cadence_hooks.interrupted = [&] { return on_cadence.steps.back() >= 5; };
+  run_training(schedule(20, 0, 0, 5), 0, "runs/tat", cadence_hooks, progress);
+  EXPECT_EQ(on_cadence.checkpoints, (std::vector<int64_t>{5}));
+  Recorder at_end;
+  TrainingHooks end_hooks = at_end.hooks();
+  end_hooks.interrupted = [] { return true; };
+  const TrainingOutcome finished = run_training(schedule(1, 0, 0, 0), 0, "runs/tat", end_hooks, progress);
+  EXPECT_FALSE(finished.interrupted);
+  EXPECT_EQ(at_end.checkpoints, (std::vector<int64_t>{1}));
+}
+
+TEST(TrainingLoop, InterruptSignalsCatchOneSignalAndRestoreTheHandlers) {
+  {
+    InterruptSignals signals;
+    EXPECT_FALSE(signals.received());
+    EXPECT_THROW(InterruptSignals second, std::logic_error);
+    std::raise(SIGTERM);  // would end the test process without the handler
+    EXPECT_TRUE(signals.received());
+    // The signal that came now has its default action again (a second one ends
+    // the process); the other is still caught.
+    auto handler_of = [](int signal_number) {
+      void (*handler)(int) = std::signal(signal_number, SIG_IGN);
+      std::signal(signal_number, handler);
+      return handler;
+    };
+    EXPECT_EQ(handler_of(SIGTERM), SIG_DFL);
+    EXPECT_NE(handler_of(SIGINT), SIG_DFL);
+  }
+  InterruptSignals again;  // the flag starts clear for the next run
+  EXPECT_FALSE(again.received());
 }
 
 TEST(TrainingLoop, EtaRateAndTermFormatting) {

@@ -30,6 +30,11 @@ BatchTensors BatchTensors::to(const c10::Device& device) const {
   return {features.to(device), joint_mask.to(device), frame_mask.to(device), parents.to(device), offsets.to(device)};
 }
 
+BatchTensors BatchTensors::items(int64_t begin, int64_t count) const {
+  return {features.narrow(0, begin, count), joint_mask.narrow(0, begin, count), frame_mask.narrow(0, begin, count),
+          parents.narrow(0, begin, count), offsets.narrow(0, begin, count)};
+}
+
 BatchTensors to_tensors(const Batch& batch) {
   const int64_t b = batch.size, t = batch.frames, j = batch.max_joints;
   BatchTensors out;

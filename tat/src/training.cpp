@@ -10,6 +10,7 @@
 
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <stdexcept>
@@ -44,7 +45,7 @@ void TatTrainConfig::validate() const {
           "window_frames must be a positive multiple of the downsampling " + std::to_string(model.downsampling()) +
               ", got " + std::to_string(window_frames));
   require(augment_probability >= 0 && augment_probability <= 1, "augment_probability must be in [0, 1]");
-  require(joint_buckets >= 0, "joint_buckets must be >= 0");
+  require(joint_buckets >= 0 && max_joint_frames >= 0, "joint_buckets and max_joint_frames must be >= 0");
   require(log_every >= 1 && validate_every >= 1 && checkpoint_every >= 1 && validation_batches >= 1,
           "log_every, validate_every, checkpoint_every and validation_batches must be >= 1");
 }
@@ -66,6 +67,7 @@ json to_json(const TatTrainConfig& c) {
           {"window_frames", c.window_frames},
           {"augment_probability", c.augment_probability},
           {"joint_buckets", c.joint_buckets},
+          {"max_joint_frames", c.max_joint_frames},
           {"log_every", c.log_every},
           {"validate_every", c.validate_every},
           {"validation_batches", c.validation_batches},
@@ -78,8 +80,8 @@ TatTrainConfig tat_train_config_from_json(const json& object, const std::string&
   if (!object.is_object()) fields.fail("a training config must be a JSON object");
   reject_unknown(object,
                  {"model", "loss", "learning_rate", "final_learning_rate", "warmup_steps", "weight_decay", "grad_clip",
-                  "steps", "batch_size", "window_frames", "augment_probability", "joint_buckets", "log_every", "validate_every",
-                  "validation_batches", "checkpoint_every", "seed", "comment"},
+                  "steps", "batch_size", "window_frames", "augment_probability", "joint_buckets", "max_joint_frames",
+                  "log_every", "validate_every", "validation_batches", "checkpoint_every", "seed", "comment"},
                  fields, "");
   TatTrainConfig c;
   if (object.contains("model")) {
@@ -116,6 +118,7 @@ TatTrainConfig tat_train_config_from_json(const json& object, const std::string&
   read(object, "window_frames", "", c.window_frames);
   read(object, "augment_probability", "", c.augment_probability);
   read(object, "joint_buckets", "", c.joint_buckets);
+  read(object, "max_joint_frames", "", c.max_joint_frames);
   read(object, "log_every", "", c.log_every);
   read(object, "validate_every", "", c.validate_every);
   read(object, "validation_batches", "", c.validation_batches);
@@ -174,29 +177,49 @@ TatTrainer::Inputs TatTrainer::inputs(const Batch& batch) {
   return in;
 }
 
-std::map<std::string, double> TatTrainer::step(const Batch& batch, int64_t step_index) {
+int64_t items_per_part(int64_t items, int64_t joint_frames_per_item, int64_t max_joint_frames) {
+  if (max_joint_frames <= 0) return items;
+  return std::clamp<int64_t>(max_joint_frames / std::max<int64_t>(1, joint_frames_per_item), 1, std::max<int64_t>(1, items));
+}
+
+LossTerms backward_in_parts(Tokenizer& tokenizer, const BatchTensors& batch, const at::Tensor& embeddings,
+                            const LossWeights& weights, int64_t max_joint_frames) {
+  const int64_t items = batch.features.size(0);
+  const int64_t part_items =
+      items_per_part(items, batch.features.size(1) * batch.features.size(2), max_joint_frames);
+  LossTerms terms;
+  at::Tensor perplexity;
+  for (int64_t begin = 0; begin < items; begin += part_items) {
+    const int64_t count = std::min(part_items, items - begin);
+    const double share = static_cast<double>(count) / static_cast<double>(items);
+    const BatchTensors part = batch.items(begin, count);
+    const TokenizerOutput out = tokenizer->forward(part.features, part.joint_mask, part.frame_mask,
+                                                   embeddings.defined() ? embeddings.narrow(0, begin, count) : embeddings);
+    const ReconstructionLoss loss = reconstruction_loss(out.reconstruction, part, out.commitment_loss, weights);
+    (loss.total * share).backward();
+    terms["loss"] += share * loss.total.item<double>();
+    terms["rotation"] += share * loss.rotation;
+    terms["root"] += share * loss.root;
+    terms["position"] += share * loss.position;
+    terms["velocity"] += share * loss.velocity;
+    terms["commitment"] += share * loss.commitment;
+    const at::Tensor part_perplexity = out.perplexity.detach().to(torch::kCPU, torch::kFloat64) * share;
+    perplexity = perplexity.defined() ? perplexity + part_perplexity : part_perplexity;
+  }
+  for (int64_t r = 0; r < perplexity.numel(); ++r) terms["perplexity" + std::to_string(r)] = perplexity[r].item<double>();
+  return terms;
+}
+
+LossTerms TatTrainer::step(const Batch& batch, int64_t step_index) {
   const double lr = learning_rate_at(config_, step_index);
   for (auto& group : optimizer_->param_groups()) static_cast<torch::optim::AdamWOptions&>(group.options()).lr(lr);
   const Inputs in = inputs(batch);
   tokenizer_->train();
-  const TokenizerOutput out =
-      tokenizer_->forward(in.batch.features, in.batch.joint_mask, in.batch.frame_mask, in.embeddings);
-  const ReconstructionLoss loss = reconstruction_loss(out.reconstruction, in.batch, out.commitment_loss, config_.loss);
   optimizer_->zero_grad();
-  loss.total.backward();
+  LossTerms terms = backward_in_parts(tokenizer_, in.batch, in.embeddings, config_.loss, config_.max_joint_frames);
   if (config_.grad_clip > 0) torch::nn::utils::clip_grad_norm_(tokenizer_->parameters(), config_.grad_clip);
   optimizer_->step();
-  std::map<std::string, double> terms = {{"loss", loss.total.item<double>()},
-                                         {"rotation", loss.rotation},
-                                         {"root", loss.root},
-                                         {"position", loss.position},
-                                         {"velocity", loss.velocity},
-                                         {"commitment", loss.commitment},
-                                         {"lr", lr}};
-  const at::Tensor perplexity = out.perplexity.to(torch::kCPU, torch::kFloat64);
-  for (int64_t r = 0; r < perplexity.numel(); ++r) {
-    terms["perplexity" + std::to_string(r)] = perplexity[r].item<double>();
-  }
+  terms["lr"] = lr;
   return terms;
 }
 

@@ -22,6 +22,8 @@ struct BatchTensors {
   at::Tensor offsets;     // (B, J, 3) float32 rest offsets, zero for padding
 
   BatchTensors to(const c10::Device& device) const;
+  // Items [begin, begin + count) of every tensor (views, no copy).
+  BatchTensors items(int64_t begin, int64_t count) const;
 };
 
 BatchTensors to_tensors(const Batch& batch);

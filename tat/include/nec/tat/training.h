@@ -41,6 +41,8 @@ struct TatTrainConfig {
   int64_t window_frames = 64;        // training crop T; a multiple of the downsampling
   double augment_probability = 0.5;  // rig augmentation per item
   int64_t joint_buckets = 16;        // batches of similar joint counts (BatchOptions::joint_buckets); 0 = off
+  int64_t max_joint_frames = 0;      // most B × J × T entries per forward/backward pass; a bigger batch is run
+                                     // in parts whose gradients add up (less memory, same update); 0 = no limit
   int64_t log_every = 20;
   int64_t validate_every = 500;
   int64_t validation_batches = 8;
@@ -60,6 +62,23 @@ TatTrainConfig tat_train_config_from_json(const nlohmann::json& object, const st
 // Learning rate at `step` (linear warmup, then cosine to final_learning_rate).
 double learning_rate_at(const TatTrainConfig& config, int64_t step);
 
+// Loss terms of one batch ("loss", "rotation", "root", "position", "velocity",
+// "commitment", "perplexity0", ...).
+using LossTerms = std::map<std::string, double>;
+
+// Items of a batch that one forward/backward pass takes: all of them when
+// max_joint_frames is 0, else as many as fit (J × T entries each), at least 1.
+int64_t items_per_part(int64_t items, int64_t joint_frames_per_item, int64_t max_joint_frames);
+
+// Forward and backward of `batch` in parts of at most `max_joint_frames`
+// B × J × T entries (0: one part); the gradients add up in the tokenizer's
+// parameters. Each part's loss counts by its share of the batch's items, so
+// the sum is the whole batch's loss exactly when the items have equal masks
+// (and close to it for bucketed batches of similar sizes). `embeddings` is
+// (B, J, D) or undefined (zero-pad kind). Returns the share-weighted terms.
+LossTerms backward_in_parts(Tokenizer& tokenizer, const BatchTensors& batch, const at::Tensor& embeddings,
+                            const LossWeights& weights, int64_t max_joint_frames);
+
 class TatTrainer {
  public:
   // `vectors` may be null when the OwO encoder reads no names. Models are moved to `device`.
@@ -69,7 +88,7 @@ class TatTrainer {
   // One AdamW step at the scheduled learning rate; returns the loss terms
   // ("loss", "rotation", "root", "position", "velocity", "commitment", "lr",
   // "perplexity0", ...) before the step.
-  std::map<std::string, double> step(const Batch& batch, int64_t step_index);
+  LossTerms step(const Batch& batch, int64_t step_index);
   // Metrics in eval mode without gradients; the model returns to training mode.
   ReconstructionMetrics evaluate(const Batch& batch);
 
