@@ -61,7 +61,10 @@ int run_demo(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out = cli.value("--out");
   const int seed = cli.integer("--seed");
-  for (const char* part : {"zoo", "cache", "bvh", "strips"}) fs::remove_all(out / part);
+  for (const char* part : {"zoo", "cache", "bvh", "strips"}) {
+    const std::string failure = remove_tree((out / part).string());
+    if (!failure.empty()) throw std::runtime_error(failure);
+  }
   fs::create_directories(out / "bvh");
   fs::create_directories(out / "strips");
 

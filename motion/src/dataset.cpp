@@ -852,12 +852,12 @@ void save_cache(const DatasetCache& cache, const std::string& dir) {
     }
     fs::rename(temp, target);
   } catch (...) {
+    remove_tree(temp.string());
     std::error_code ignored;
-    fs::remove_all(temp, ignored);
     if (!old.empty() && !fs::exists(target, ignored)) fs::rename(old, target, ignored);
     throw;
   }
-  if (!old.empty()) fs::remove_all(old, ec);
+  if (!old.empty()) remove_tree(old.string());
 }
 
 void write_cache(const std::string& dir, const std::vector<CacheEntry>& entries, const CacheOptions& options) {

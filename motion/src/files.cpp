@@ -4,6 +4,7 @@
 #include "nec/motion/error.h"
 
 #include <fcntl.h>
+#include <ftw.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -60,6 +61,35 @@ void write_file_atomic(const std::string& path, std::string_view contents) {
     std::filesystem::remove(temp, ignored);
     throw std::runtime_error(path + ": cannot move the written file into place: " + ec.message());
   }
+}
+
+namespace {
+
+// nftw's callback has no user data: the first failure of the walk under way.
+thread_local std::string* g_remove_failure = nullptr;
+
+int remove_entry(const char* path, const struct stat*, int, struct FTW*) {
+  if (::remove(path) != 0 && errno != ENOENT && g_remove_failure->empty()) {
+    *g_remove_failure = std::string(path) + ": cannot remove: " + std::strerror(errno);
+  }
+  return 0;  // go on: remove what can be removed
+}
+
+}  // namespace
+
+std::string remove_tree(const std::string& path) {
+  struct stat info {};
+  if (::lstat(path.c_str(), &info) != 0) {
+    return errno == ENOENT ? "" : path + ": cannot remove: " + std::strerror(errno);
+  }
+  std::string failure;
+  g_remove_failure = &failure;
+  constexpr int kOpenDirectories = 32;
+  // Children before their directory (FTW_DEPTH); links are not followed (FTW_PHYS).
+  const int walked = ::nftw(path.c_str(), remove_entry, kOpenDirectories, FTW_DEPTH | FTW_PHYS);
+  g_remove_failure = nullptr;
+  if (walked != 0 && failure.empty()) failure = path + ": cannot remove: " + std::strerror(errno);
+  return failure;
 }
 
 MappedFile MappedFile::open(const std::string& path, bool populate) {

@@ -185,10 +185,9 @@ void write_checkpoint_directory(const std::string& dir, const std::string& what,
       if (!old.empty()) fs::rename(old, target, ignored);
       throw std::runtime_error(dir + ": cannot move the written checkpoint into place: " + ec.message());
     }
-    if (!old.empty()) fs::remove_all(old, ec);
+    if (!old.empty()) remove_tree(old.string());
   } catch (...) {
-    std::error_code ignored;
-    fs::remove_all(temp, ignored);
+    remove_tree(temp.string());
     throw;
   }
 }

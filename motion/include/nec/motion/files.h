@@ -14,6 +14,13 @@ std::string read_file(const std::string& path, size_t max_bytes = size_t{1} << 3
 // Throws std::runtime_error naming the file on failure.
 void write_file_atomic(const std::string& path, std::string_view contents);
 
+// Removes a file or a whole directory tree; symbolic links are removed, never
+// followed; a missing path is no error. Returns "" on success, else why the
+// first entry that could not be removed stayed. Use it instead of
+// std::filesystem::remove_all: in a process that loads LibTorch 2.x (pip
+// builds), that symbol binds to libtorch.so's own copy, which crashes.
+std::string remove_tree(const std::string& path);
+
 // A whole file mapped read-only into memory. Copies share the mapping; the
 // last one unmaps it. An empty file gives an empty mapping.
 class MappedFile {
