@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace nec {
 namespace {
 
@@ -44,6 +46,29 @@ TEST(Features, InvariantToWorldYaw) {
   for (int t = 1; t < m.frame_count; ++t) {
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(before.at(t, 0, k), after.at(t, 0, k), 1e-5);
   }
+}
+
+TEST(Features, FaceForwardRemovesTheStartHeadingOnly) {
+  std::mt19937 rng(44);
+  const Skeleton s = testing::random_skeleton(rng, 5);
+  Motion m = testing::random_motion(rng, s, 6);
+  Features reference = encode_features(s, m);
+  const double reference_angle = face_forward(reference);
+  EXPECT_NEAR(heading_angle(Quat(m.rotation(0, 0))), reference_angle, 1e-6);
+  // Facing +Z already: a second call removes nothing.
+  Features again = reference;
+  EXPECT_NEAR(face_forward(again), 0.0, 1e-6);
+
+  // The same motion turned 57 degrees about +Y faces forward to the same features.
+  const Quat yaw = axis_rotation(1, 57.0);
+  for (int t = 0; t < m.frame_count; ++t) {
+    m.rotation(t, 0) = yaw * m.rotation(t, 0);
+    m.translation(t, 0) = yaw * m.translation(t, 0);
+  }
+  Features turned = encode_features(s, m);
+  const double removed = face_forward(turned);
+  EXPECT_NEAR(std::remainder(removed - reference_angle - 57.0 * M_PI / 180.0, 2.0 * M_PI), 0.0, 1e-5);
+  for (size_t k = 0; k < turned.data.size(); ++k) EXPECT_NEAR(turned.data[k], reference.data[k], 1e-5) << k;
 }
 
 void expect_inverse(const Skeleton& s, const Motion& m, double tolerance) {

@@ -1,6 +1,7 @@
 // Tokenizer reconstruction loss: zero at the target, each term on its own channels, masks.
 #include "nec/motion/features.h"
 #include "nec/tat/loss.h"
+#include "nec/tat/tokenizer.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -141,8 +142,8 @@ TEST(TatLoss, EachTermRespondsToItsOwnChannels) {
   EXPECT_GT(l.root, 0.0);
   EXPECT_GT(l.position, 0.0);
   EXPECT_GT(l.velocity, 0.0);
-  // 0.2 on each of 3 channels at one of 12 + 9 real frames.
-  EXPECT_NEAR(l.root, 0.2 / 21.0, 1e-6);
+  // 0.2 on each of 3 channels at one of 12 + 9 real frames; x and z count at the networks' scale.
+  EXPECT_NEAR(l.root, (0.2 * (2.0 * tat::kRootDisplacementScale + 1.0) / 3.0) / 21.0, 1e-6);
 
   // Translation channels of a non-root joint are not part of Θ: nothing.
   p = f.batch.features.clone();

@@ -233,6 +233,7 @@ Batch BatchLoader::assemble(const std::vector<int>& order, int epoch, int index)
       item.skeleton = std::move(changed.skeleton);
       item.augmented = true;
     }
+    face_forward(item.features);
     items.push_back(std::move(item));
   }
 

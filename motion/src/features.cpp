@@ -50,4 +50,20 @@ Motion decode_features(const Skeleton& skeleton, const Features& f) {
   return m;
 }
 
+double face_forward(Features& f) {
+  if (f.frame_count == 0 || f.joint_count == 0) return 0.0;
+  auto root_rotation = [&](int t) {
+    Rot6 r6;
+    for (int k = 0; k < 6; ++k) r6[k] = f.at(t, 0, 3 + k);
+    return rot6d_to_matrix(r6);
+  };
+  const double angle = heading_angle(Quat(root_rotation(0)));
+  const Mat3 undo = Eigen::AngleAxisd(-angle, Vec3::UnitY()).toRotationMatrix();
+  for (int t = 0; t < f.frame_count; ++t) {
+    const Rot6 r6 = matrix_to_rot6d(undo * root_rotation(t));
+    for (int k = 0; k < 6; ++k) f.at(t, 0, 3 + k) = static_cast<float>(r6[k]);
+  }
+  return angle;
+}
+
 }  // namespace nec

@@ -69,6 +69,50 @@ at::Tensor heading_matrix(const at::Tensor& rotation) {
   return rows.view(shape);
 }
 
+namespace {
+
+// windows (N, L, J, 9) with each window's root orientations premultiplied by turn (N, 3, 3).
+at::Tensor turn_root_orientations(const at::Tensor& windows, const at::Tensor& turn) {
+  at::Tensor out = windows.clone();
+  const at::Tensor root = rot6d_to_matrix(windows.select(2, 0).narrow(-1, 3, 6));  // (N, L, 3, 3)
+  out.select(2, 0).narrow(-1, 3, 6).copy_(matrix_to_rot6d(torch::matmul(turn.unsqueeze(1), root)));
+  return out;
+}
+
+// (N, L, J, 9) -> (N, 3, 3) heading of the root at frame `frame` of each window.
+at::Tensor root_heading_at(const at::Tensor& windows, int64_t frame) {
+  return heading_matrix(rot6d_to_matrix(windows.select(1, frame).select(1, 0).narrow(-1, 3, 6)));
+}
+
+}  // namespace
+
+at::Tensor face_windows_forward(const at::Tensor& windows) {
+  if (windows.dim() != 4 || windows.size(3) != 9 || windows.size(1) == 0 || windows.size(2) == 0) {
+    throw std::invalid_argument("face_windows_forward: windows must be (N, L > 0, J > 0, 9)");
+  }
+  return turn_root_orientations(windows, root_heading_at(windows, 0).transpose(-1, -2));
+}
+
+at::Tensor continue_window_headings(const at::Tensor& windows, const std::vector<int64_t>& starts) {
+  if (windows.dim() != 4 || windows.size(3) != 9 || windows.size(2) == 0 ||
+      static_cast<int64_t>(starts.size()) != windows.size(0)) {
+    throw std::invalid_argument("continue_window_headings: windows must be (N, L, J > 0, 9) with N = starts.size()");
+  }
+  std::vector<at::Tensor> turned{windows.narrow(0, 0, std::min<int64_t>(1, windows.size(0)))};
+  for (size_t k = 1; k < starts.size(); ++k) {
+    const int64_t offset = starts[k] - starts[k - 1];
+    if (offset <= 0 || offset > windows.size(1)) {
+      throw std::invalid_argument("continue_window_headings: the windows must follow one another without gaps");
+    }
+    // Without overlap the window before ends one frame earlier: its last heading.
+    const at::Tensor wanted = root_heading_at(turned.back(), std::min(offset, windows.size(1) - 1));  // (1, 3, 3)
+    const at::Tensor window = windows.narrow(0, static_cast<int64_t>(k), 1);
+    const at::Tensor has = root_heading_at(window, 0);                           // (1, 3, 3)
+    turned.push_back(turn_root_orientations(window, torch::matmul(wanted, has.transpose(-1, -2))));
+  }
+  return torch::cat(turned);
+}
+
 FkResult features_to_positions(const at::Tensor& features, const at::Tensor& parents, const at::Tensor& offsets) {
   check_shape(features.dim() == 4 && features.size(3) == 9, "features must be (B, T, J, 9)");
   const int64_t batch = features.size(0), frames = features.size(1), joints = features.size(2);

@@ -4,6 +4,7 @@
 #include "nec/motion/error.h"
 #include "nec/owo/graph.h"
 #include "nec/owo/joint_names.h"
+#include "nec/tat/fk.h"
 
 #include <torch/torch.h>
 
@@ -129,7 +130,7 @@ at::Tensor encode_clip(TokenizerImpl& tokenizer, const Features& features, const
   }
   c10::InferenceMode inference;
   const auto [batch_embeddings, mask] = skeleton_inputs(embeddings, joints, count);
-  const at::Tensor latent = tokenizer.encode(torch::stack(crops), mask, batch_embeddings);
+  const at::Tensor latent = tokenizer.encode(face_windows_forward(torch::stack(crops)), mask, batch_embeddings);
   const at::Tensor codes = tokenizer.quantize(latent).codes;  // (n, length / r, R)
 
   std::vector<at::Tensor> owned;
@@ -163,7 +164,9 @@ Features decode_clip(TokenizerImpl& tokenizer, const at::Tensor& codes, int fram
   }
   const auto [batch_embeddings, mask] = skeleton_inputs(embeddings, joint_count, count);
   const at::Tensor latent = tokenizer.codes_to_latent(torch::stack(window_codes));
-  at::Tensor decoded = tokenizer.decode(latent, mask, batch_embeddings).to(torch::kFloat32);  // (n, length, J, 9)
+  // Each window faces +Z at its start, as it was encoded: turn it to go on from the one before.
+  at::Tensor decoded = continue_window_headings(
+      tokenizer.decode(latent, mask, batch_embeddings).to(torch::kFloat32), plan.starts);  // (n, length, J, 9)
   // Blend in a space where windows agree: absolute root height instead of Δy.
   decoded.select(2, 0).select(2, 1).copy_(decoded.select(2, 0).select(2, 1).cumsum(1));
 

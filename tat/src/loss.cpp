@@ -3,6 +3,7 @@
 #include "nec/tat/loss.h"
 
 #include "nec/tat/fk.h"
+#include "nec/tat/tokenizer.h"
 
 #include <torch/torch.h>
 
@@ -46,8 +47,11 @@ ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const Batch
 
   const at::Tensor rotation =
       masked_l1(prediction.narrow(-1, 3, 6), target.features.narrow(-1, 3, 6), real);
-  const at::Tensor root =
-      masked_l1(prediction.select(2, 0).narrow(-1, 0, 3), target.features.select(2, 0).narrow(-1, 0, 3), frame);
+  // At the scale the networks predict it (see kRootDisplacementScale).
+  const at::Tensor root = masked_l1(
+      scale_root_displacement(prediction.narrow(2, 0, 1), kRootDisplacementScale).select(2, 0).narrow(-1, 0, 3),
+      scale_root_displacement(target.features.narrow(2, 0, 1), kRootDisplacementScale).select(2, 0).narrow(-1, 0, 3),
+      frame);
 
   const at::Tensor predicted_positions = features_to_positions(prediction, target.parents, target.offsets).positions;
   at::Tensor target_positions;

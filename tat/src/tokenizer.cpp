@@ -28,8 +28,6 @@ torch::nn::Conv1d conv1d(int64_t in, int64_t out, int64_t kernel, int64_t stride
       torch::nn::Conv1dOptions(in, out, kernel).stride(stride).padding(padding).dilation(dilation));
 }
 
-// Encoder input scale of the root's x and z displacement (features 0 and 2 of joint 0).
-constexpr double kRootDisplacementInputScale = 20.0;
 
 // The rot6D of the identity, the rest pose the decoders predict offsets from: (9).
 at::Tensor rest_pose_features(const at::TensorOptions& options) {
@@ -337,6 +335,14 @@ std::string shape_of(const at::Tensor& x) {
 
 }  // namespace
 
+at::Tensor scale_root_displacement(const at::Tensor& features, double factor) {
+  at::Tensor scaled = features.clone();
+  at::Tensor root = scaled.select(-2, 0);  // (..., 9) view
+  root.select(-1, 0).mul_(factor);
+  root.select(-1, 2).mul_(factor);
+  return scaled;
+}
+
 std::string to_string(TokenizerKind kind) {
   switch (kind) {
     case TokenizerKind::NecRvq: return "nec-rvq";
@@ -420,14 +426,8 @@ at::Tensor TokenizerImpl::encode(const at::Tensor& features, const at::Tensor& j
                                                   " joints, more than this zero-pad-rvq model's max_joints = " +
                                                   std::to_string(config_.max_joints));
   }
-  // The root's horizontal displacement per frame (~0.04 body sizes when walking)
-  // is far smaller than every other feature: scaled up at the input so that the
-  // encoder does not lose it. The decoder still outputs it in body sizes.
-  at::Tensor scaled = features.clone();
-  at::Tensor root = scaled.select(2, 0);  // (B, T, 9) view
-  root.select(-1, 0).mul_(kRootDisplacementInputScale);
-  root.select(-1, 2).mul_(kRootDisplacementInputScale);
-  return encoder_->forward(scaled, joint_mask.to(torch::kBool), joint_embeddings);
+  return encoder_->forward(scale_root_displacement(features, kRootDisplacementScale), joint_mask.to(torch::kBool),
+                           joint_embeddings);
 }
 
 QuantizerOutput TokenizerImpl::quantize(const at::Tensor& latent, const at::Tensor& step_mask) {
@@ -465,7 +465,8 @@ at::Tensor TokenizerImpl::decode(const at::Tensor& quantized, const at::Tensor& 
                                                   " joints, more than this zero-pad-rvq model's max_joints = " +
                                                   std::to_string(config_.max_joints));
   }
-  return decoder_->forward(quantized, joint_mask.to(torch::kBool), joint_embeddings);
+  return scale_root_displacement(decoder_->forward(quantized, joint_mask.to(torch::kBool), joint_embeddings),
+                                 1.0 / kRootDisplacementScale);
 }
 
 at::Tensor TokenizerImpl::codes_to_latent(const at::Tensor& codes) {

@@ -34,4 +34,12 @@ Features encode_features(const Skeleton& skeleton, const Motion& motion);
 // Non-root joints get the skeleton's rest offsets as translations.
 Motion decode_features(const Skeleton& skeleton, const Features& features);
 
+// Turns the motion about +Y (around its start point) so that frame 0 faces +Z:
+// every root orientation is premultiplied by the inverse of frame 0's heading.
+// The displacements, in each frame's own heading frame, stay as they are.
+// Training crops and tokenizer windows start this way, so that the tokens
+// hold how a motion turns, never where it happens to face. Returns the
+// heading angle removed (radians about +Y).
+double face_forward(Features& features);
+
 }  // namespace nec

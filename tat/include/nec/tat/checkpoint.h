@@ -29,7 +29,8 @@ class Optimizer;
 namespace nec::tat {
 
 constexpr const char* kTatCheckpointFormat = "nec-tat";
-constexpr int kTatCheckpointVersion = 2;  // 2: the encoder scales the root displacement up (tokenizer.cpp)
+constexpr int kTatCheckpointVersion = 3;  // 2: the encoder scales the root displacement up; 3: the decoder
+                                           // predicts it scaled, windows face +Z (face_forward)
 
 struct TatCheckpointInfo {
   int64_t window_frames = 64;   // training window T, e.g. 64; inference uses windows of this size

@@ -16,6 +16,8 @@
 
 #include <ATen/core/Tensor.h>
 
+#include <vector>
+
 namespace nec::tat {
 
 // (..., 6) -> (..., 3, 3) rotation matrices (columns x, y, x × y).
@@ -25,6 +27,17 @@ at::Tensor matrix_to_rot6d(const at::Tensor& matrix);
 // (..., 3, 3) rotation -> (..., 3, 3) rotation about +Y: its heading. Identity
 // where the heading is undefined (rotation by pi about a horizontal axis).
 at::Tensor heading_matrix(const at::Tensor& rotation);
+
+// Windows (N, L, J, 9) each turned about +Y so that its frame 0 faces +Z, as
+// nec::face_forward turns one clip (the root orientations only). A copy.
+at::Tensor face_windows_forward(const at::Tensor& windows);
+// The inverse across a clip cut into windows starting at `starts` (frames,
+// increasing, overlapping or back to back): window 0 stays; every later
+// window is turned about +Y so that its frame 0 has the heading that the
+// window before it (already turned) has at that frame, or at its last frame
+// when they do not overlap. Decoded windows that each face +Z so continue one
+// another's turning. A copy.
+at::Tensor continue_window_headings(const at::Tensor& windows, const std::vector<int64_t>& starts);
 
 struct FkResult {
   at::Tensor positions;         // (B, T, J, 3) world positions

@@ -43,6 +43,15 @@
 namespace nec::tat {
 
 enum class TokenizerKind { NecRvq, NecVq, ZeroPadRvq };
+// The root's horizontal displacement per frame (features 0 and 2 of joint 0,
+// ~0.04 body sizes a frame when walking) is far smaller than every other
+// feature: the networks read and predict it times kRootDisplacementScale, and
+// the reconstruction loss compares it at that scale, so that it is learnt as
+// precisely as the rotations.
+constexpr double kRootDisplacementScale = 20.0;
+// A copy of features (..., J, 9) with the root's x and z displacement times `factor`.
+at::Tensor scale_root_displacement(const at::Tensor& features, double factor);
+
 std::string to_string(TokenizerKind kind);             // "nec-rvq", "nec-vq", "zero-pad-rvq"
 TokenizerKind tokenizer_kind_from_string(const std::string& name);  // throws std::invalid_argument
 
