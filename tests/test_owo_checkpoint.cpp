@@ -434,8 +434,14 @@ TEST_F(OwoCheckpoint, SavingAgainReplacesAndLeavesNoTemporaries) {
 }
 
 TEST_F(OwoCheckpoint, NewerVersionNamesBothVersions) {
-  replace_in_config("\"version\": 1", "\"version\": 2");
-  expect_input_error(dir_, {"config.json", "format version 2", "reads version 1"});
+  replace_in_config("\"version\": 2", "\"version\": 3");
+  expect_input_error(dir_, {"config.json", "format version 3", "reads version 2"});
+}
+
+// Version 1 checkpoints have no LCA ancestry term (lca_ancestry.*): refused with a hint, not a missing tensor.
+TEST_F(OwoCheckpoint, OlderVersionIsRefusedWithAHint) {
+  replace_in_config("\"version\": 2", "\"version\": 1");
+  expect_input_error(dir_, {"config.json", "format version 1", "reads version 2", "retrain", "nec train owo"});
 }
 
 TEST_F(OwoCheckpoint, ForeignFormatSaysHowToMakeOne) {
