@@ -31,6 +31,7 @@ std::string pair_name(int64_t i, int64_t j) {
 }
 
 constexpr double kNoEdge = -std::numeric_limits<double>::infinity();
+constexpr double kMinGain = 1e-9;  // likelihood climb: smaller gains are rounding noise, and could cycle
 
 // A cycle of the parent pointers `parents` (-1: none), as its nodes; empty when there is none.
 std::vector<int> find_cycle(const std::vector<int>& parents) {
@@ -177,59 +178,80 @@ std::vector<int> swapped_with_parent(std::vector<int> parents, int v) {
   return parents;
 }
 
-// Hill climbing on the tree's log-likelihood. The arborescence's edge votes
-// count each pair once, right or wrong; this weighs every pair a move changes
-// by its probabilities. E.g. a leaf whose own pair with its parent is
-// mispredicted still has its siblings, whose LCAs with it name that parent.
-// Two kinds of move:
-// - hang the subtree S of v under another joint u outside it: only pairs
-//   (x in S, y outside) change their LCA, from LCA(v, y) to LCA(u, y);
-// - swap v with its parent, the error no subtree move undoes (two neighbours
-//   on a chain in the wrong order).
-// Each step makes the move that gains most (a first-found gain can hang a
-// joint under its own descendants, out of reach of later moves), until none
-// gains. lp: log-probabilities [(x * n + y) * n + k]. Returns the final
-// log-likelihood.
-double climb_likelihood(std::vector<int>& parents, const double* lp) {
+// The subtree move that raises the log-likelihood most: hang the subtree S of
+// a joint v under another joint u outside it. Only pairs (x in S, y outside)
+// change their LCA, from LCA(v, y) to LCA(u, y), so only they are summed.
+// `lca` is the matrix of `parents`. Returns the new parents; empty when no move gains.
+std::vector<int> best_subtree_move(const std::vector<int>& parents, const std::vector<int>& lca, const double* lp) {
   const int n = static_cast<int>(parents.size());
   auto pair_log_p = [&](int x, int y, int k) {
     return lp[(static_cast<int64_t>(x) * n + y) * n + k] + lp[(static_cast<int64_t>(y) * n + x) * n + k];
   };
-  constexpr double kMinGain = 1e-9;  // moves that gain less are rounding noise, and could cycle
-  std::vector<int> lca = lca_matrix(parents);
-  double likelihood = tree_log_likelihood(lca, lp, n);
-  while (true) {
-    double best_gain = kMinGain;
-    std::vector<int> best;
-    for (int v = 0; v < n; ++v) {
-      if (parents[v] < 0) continue;
-      std::vector<int> inside, outside;
-      for (int x = 0; x < n; ++x) (lca[x * n + v] == v ? inside : outside).push_back(x);
-      for (int u : outside) {
-        if (u == parents[v]) continue;
-        double gain = 0.0;
-        for (int y : outside) {
-          const int before = lca[v * n + y], after = lca[u * n + y];
-          if (before == after) continue;
-          for (int x : inside) gain += pair_log_p(x, y, after) - pair_log_p(x, y, before);
-        }
-        if (gain > best_gain) {
-          best_gain = gain;
-          best = parents;
-          best[v] = u;
-        }
+  double best_gain = kMinGain;
+  int best_joint = -1, best_parent = -1;
+  for (int v = 0; v < n; ++v) {
+    if (parents[v] < 0) continue;
+    std::vector<int> inside, outside;
+    for (int x = 0; x < n; ++x) (lca[x * n + v] == v ? inside : outside).push_back(x);
+    for (int u : outside) {
+      if (u == parents[v]) continue;
+      double gain = 0.0;
+      for (int y : outside) {
+        const int before = lca[v * n + y], after = lca[u * n + y];
+        if (before == after) continue;
+        for (int x : inside) gain += pair_log_p(x, y, after) - pair_log_p(x, y, before);
       }
-      std::vector<int> swapped = swapped_with_parent(parents, v);
-      const double gain = tree_log_likelihood(lca_matrix(swapped), lp, n) - likelihood;
       if (gain > best_gain) {
         best_gain = gain;
-        best = std::move(swapped);
+        best_joint = v;
+        best_parent = u;
       }
     }
-    if (best.empty()) return likelihood;
-    parents = std::move(best);
-    lca = lca_matrix(parents);
-    likelihood = tree_log_likelihood(lca, lp, n);
+  }
+  if (best_joint < 0) return {};
+  std::vector<int> moved = parents;
+  moved[best_joint] = best_parent;
+  return moved;
+}
+
+// The swap of a joint with its parent that raises the log-likelihood (`likelihood`
+// now) most; empty when none does. Each candidate is scored in full, O(J^2 depth).
+std::vector<int> best_parent_swap(const std::vector<int>& parents, double likelihood, const double* lp) {
+  const int n = static_cast<int>(parents.size());
+  double best_gain = kMinGain;
+  std::vector<int> best;
+  for (int v = 0; v < n; ++v) {
+    if (parents[v] < 0) continue;
+    std::vector<int> swapped = swapped_with_parent(parents, v);
+    const double gain = tree_log_likelihood(lca_matrix(swapped), lp, n) - likelihood;
+    if (gain > best_gain) {
+      best_gain = gain;
+      best = std::move(swapped);
+    }
+  }
+  return best;
+}
+
+// Hill climbing on the tree's log-likelihood. The arborescence's edge votes
+// count each pair once, right or wrong; this weighs every pair a move changes
+// by its probabilities. Each step makes the best subtree move (the best, not
+// the first found: that can hang a joint under its own descendants, out of
+// reach of later moves), or when none gains, the best swap of a joint with its
+// parent (two neighbours on a chain in the wrong order, which no subtree move
+// undoes), until neither gains, or after J moves: predictions that need more
+// are far from any tree, and a step costs up to O(J^3) (a 140-joint skeleton
+// with poor predictions took ~15 s without the bound). lp: log-probabilities
+// [(x * n + y) * n + k]. Returns the final log-likelihood.
+double climb_likelihood(std::vector<int>& parents, const double* lp) {
+  const int n = static_cast<int>(parents.size());
+  for (int moves = 0;; ++moves) {
+    const std::vector<int> lca = lca_matrix(parents);
+    const double likelihood = tree_log_likelihood(lca, lp, n);
+    if (moves == n) return likelihood;
+    std::vector<int> next = best_subtree_move(parents, lca, lp);
+    if (next.empty()) next = best_parent_swap(parents, likelihood, lp);
+    if (next.empty()) return likelihood;
+    parents = std::move(next);
   }
 }
 
