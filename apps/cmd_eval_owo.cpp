@@ -102,10 +102,10 @@ int run_eval_owo(int argc, char** argv) {
                   "the LCA pointer's accuracy over all joint pairs i < j, the rest-offset error (normalized units\n"
                   "and per cent of the skeleton's diameter), and the share of skeletons whose tree is rebuilt\n"
                   "(NECromancer appendix C.4) two ways: from the exact predicted LCA matrix (the argmax of every\n"
-                  "pair; one wrong pair fails it), and from the predicted LCA probabilities (the tree that agrees\n"
-                  "best with them, a maximum spanning arborescence); either counts only when its parent array is\n"
-                  "the true one. The same on the training skeletons (un-augmented) for contrast. Prints a Markdown\n"
-                  "table; --json writes every number.");
+                  "pair; one wrong pair fails it), and from the predicted LCA probabilities (a tree decoded from\n"
+                  "them: pair votes, a maximum spanning arborescence, then a likelihood climb); either counts only\n"
+                  "when its parent array is the true one. The same on the training skeletons (un-augmented) for\n"
+                  "contrast. Prints a Markdown table; --json writes every number.");
   cli.option("--model", "CKPT", "", "OwO checkpoint directory", true);
   cli.option("--data", "CACHES", "", "dataset caches, comma-separated", true);
   cli.option("--json", "OUT.json", "", "also write the results as JSON");
