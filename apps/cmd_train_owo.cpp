@@ -63,8 +63,9 @@ int run_train_owo(int argc, char** argv) {
                   "clips, bone lengths, joint removal and subdivision). Skeletons the config's data.held_out patterns\n"
                   "name (e.g. whole body plans: \"spider\", \"snake\"), and what the caches hold out, are never trained\n"
                   "on: they validate every validate_every steps (LCA accuracy over all pairs, offset error, share of\n"
-                  "trees rebuilt exactly from the predicted LCAs). A checkpoint (model + optimizer state + step) is\n"
-                  "written every checkpoint_every steps and at the end; --resume continues it with the same config.\n"
+                  "trees rebuilt from the exact predicted LCA matrix: rebuilt, and from the predicted LCA\n"
+                  "probabilities: decoded). A checkpoint (model + optimizer state + step) is written every\n"
+                  "checkpoint_every steps and at the end; --resume continues it with the same config.\n"
                   "A NaN or infinite loss stops training with exit code 1; the last checkpoint stays.");
   cli.option("--config", "CFG.json", "", "training config (configs/owo_cpu.json, configs/owo_gpu.json)", true);
   cli.option("--data", "CACHES", "", "dataset caches from `nec prepare`, comma-separated", true);
@@ -153,7 +154,8 @@ int run_train_owo(int argc, char** argv) {
     const owo::ScoreSummary held_out = owo::summarize(trainer.score_held_out());
     return LossTerms{{"held_out_lca_acc", held_out.lca_accuracy},
                      {"offset_pct", held_out.offset_percent},
-                     {"rebuilt", held_out.rebuild_rate}};
+                     {"rebuilt", held_out.rebuild_rate},
+                     {"decoded", held_out.decode_rate}};
   };
   hooks.checkpoint = [&](int64_t step) { trainer.save(out, step, data); };
 

@@ -146,8 +146,12 @@ TEST_F(CliTrain, CheckpointsResumeAndEvaluate) {
   ASSERT_EQ(eval.exit_code, 0) << eval.output;
   EXPECT_TRUE(contains(eval.output, "| held out: spider | 1 |")) << eval.output;
   EXPECT_TRUE(contains(eval.output, "| training skeletons | 8 |")) << eval.output;
+  EXPECT_TRUE(contains(eval.output, "trees rebuilt from the exact LCA matrix | trees rebuilt from the LCA probabilities |"))
+      << eval.output;
   const std::string written = read_file(json);
   EXPECT_TRUE(contains(written, "\"rebuild_rate\"")) << written;
+  EXPECT_TRUE(contains(written, "\"decode_rate\"")) << written;
+  EXPECT_TRUE(contains(written, "\"decoded_wrong_parents\"")) << written;
   EXPECT_TRUE(contains(written, "\"offset_percent_of_diameter\"")) << written;
 }
 

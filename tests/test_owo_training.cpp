@@ -318,6 +318,9 @@ TEST(OwoTrainer, ResumedStepsEqualTheUninterruptedRun) {
     EXPECT_LE(s.lca_accuracy(), 1.0);
     EXPECT_TRUE(std::isfinite(s.offset_error));
     EXPECT_EQ(s.rebuilt, s.rebuild_failure.empty());
+    EXPECT_GE(s.decoded_wrong_parents, 0);
+    EXPECT_LE(s.decoded_wrong_parents, s.joints);
+    EXPECT_EQ(s.decoded, s.decoded_wrong_parents == 0);
   }
 }
 

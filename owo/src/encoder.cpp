@@ -154,8 +154,12 @@ OwoOutput OwoEncoderImpl::forward(const GraphBatch& batch) {
   }
 
   OwoOutput out;
-  out.joints = nodes.narrow(1, 1, j) * mask.unsqueeze(-1).to(nodes.scalar_type());
+  const at::Tensor mask_float = mask.to(nodes.scalar_type());
+  out.joints = nodes.narrow(1, 1, j) * mask_float.unsqueeze(-1);
   out.skeleton = nodes.select(1, 0);
+  // The last block updates no edges: these are the ones it read, the encoder's final pair state.
+  const at::Tensor pair_mask = mask_float.unsqueeze(2) * mask_float.unsqueeze(1);  // (B, J, J)
+  out.joint_edges = edges.narrow(1, 1, j).narrow(2, 1, j) * pair_mask.unsqueeze(-1);
   return out;
 }
 

@@ -47,8 +47,12 @@ std::vector<SkeletonScore> score_skeletons(OwoPretrainerImpl& model, const std::
       graphs.push_back(make_skeleton_graph(s.skeleton, names, config.graph));
     }
     const GraphBatch batch = collate(graphs, config.name_dim).to(device);
+    at::Tensor lca_logits;  // (B, J, J, J)
     std::vector<at::Tensor> predicted_lca;
-    if (has_lca) predicted_lca = lca_matrices_from_logits(model.all_pair_lca_logits(batch), batch.joint_counts);
+    if (has_lca) {
+      lca_logits = model.all_pair_lca_logits(batch).to(torch::kCPU);
+      predicted_lca = lca_matrices_from_logits(lca_logits, batch.joint_counts);
+    }
     at::Tensor offsets;
     if (has_offset) offsets = model.predicted_offsets(batch).to(torch::kCPU);  // (B, J, 3)
 
@@ -78,6 +82,10 @@ std::vector<SkeletonScore> score_skeletons(OwoPretrainerImpl& model, const std::
         } else {
           score.rebuilt = true;
         }
+        const RebuiltTree decoded =
+            decode_tree(lca_logits[b].slice(0, 0, joints).slice(1, 0, joints).slice(2, 0, joints));
+        for (int64_t i = 0; i < joints; ++i) score.decoded_wrong_parents += decoded.parents[i] != s.skeleton.parents[i];
+        score.decoded = score.decoded_wrong_parents == 0;
       }
       if (has_offset && joints > 1) {
         const at::Tensor error =
@@ -108,9 +116,11 @@ ScoreSummary summarize(const std::vector<SkeletonScore>& scores) {
     summary.offset_error += s.offset_error / scores.size();
     summary.offset_percent += s.offset_percent / scores.size();
     summary.rebuilt += s.rebuilt ? 1 : 0;
+    summary.decoded += s.decoded ? 1 : 0;
   }
   summary.lca_accuracy = pairs > 0 ? static_cast<double>(correct) / pairs : 0.0;
   summary.rebuild_rate = static_cast<double>(summary.rebuilt) / scores.size();
+  summary.decode_rate = static_cast<double>(summary.decoded) / scores.size();
   return summary;
 }
 

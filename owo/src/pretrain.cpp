@@ -31,6 +31,20 @@ void PretrainConfig::validate() const {
   require(temperature > 0.0, "temperature must be positive");
 }
 
+PairScoreImpl::PairScoreImpl(int64_t dim, int64_t edge_dim) {
+  candidate_ = register_module("candidate", torch::nn::Linear(dim, dim));
+  joint_ = register_module("joint", torch::nn::Linear(torch::nn::LinearOptions(dim, dim).bias(false)));
+  edge_ = register_module("edge", torch::nn::Linear(torch::nn::LinearOptions(edge_dim, dim).bias(false)));
+  out_ = register_module("out", torch::nn::Linear(dim, 1));
+}
+
+at::Tensor PairScoreImpl::forward(const at::Tensor& joints, const at::Tensor& joint_edges) {
+  // Linear([h_k || h_i || e]) = W_k h_k + W_i h_i + W_e e, broadcast over (i, k).
+  const at::Tensor hidden =
+      candidate_(joints).unsqueeze(1) + joint_(joints).unsqueeze(2) + edge_(joint_edges);  // (B, J, J, D)
+  return out_(torch::relu(hidden)).squeeze(-1);
+}
+
 struct OwoPretrainerImpl::Terms {
   at::Tensor total, offset, pair_offset, lca, name, lca_accuracy;  // scalars; undefined when not run
 };
@@ -45,6 +59,7 @@ OwoPretrainerImpl::OwoPretrainerImpl(const OwoConfig& encoder_config, const Pret
   if (config_.lca_loss) {
     lca_query_ = register_module("lca_query", make_mlp(d, d, d));
     lca_key_ = register_module("lca_key", make_mlp(d, d, d));
+    lca_ancestry_ = register_module("lca_ancestry", PairScore(d, encoder_config.edge_dim));
   }
   if (config_.name_loss && encoder_config.name_dim > 0) {
     name_node_ = register_module("name_node", make_mlp(d, d, d));
@@ -94,9 +109,15 @@ OwoPretrainerImpl::Terms OwoPretrainerImpl::compute(const GraphBatch& batch) {
     if (config_.lca_loss) {
       const at::Tensor query = lca_query_->forward(h_first + h_second);  // (B, P, D)
       const at::Tensor keys = lca_key_->forward(h);                      // (B, J, D)
-      at::Tensor logits = torch::bmm(query, keys.transpose(1, 2)) / std::sqrt(static_cast<double>(d));  // (B, P, J)
+      const at::Tensor ancestry = lca_ancestry_->forward(out.joints, out.joint_edges);  // (B, J, J)
+      const int64_t j = batch.max_joints();
+      auto ancestry_rows = [&](const at::Tensor& index) {  // (B, P) -> (B, P, J): a(index, k) over k
+        return ancestry.gather(1, index.unsqueeze(-1).expand({b, p, j}));
+      };
+      at::Tensor logits = torch::bmm(query, keys.transpose(1, 2)) / std::sqrt(static_cast<double>(d)) +
+                          ancestry_rows(first) + ancestry_rows(second);  // (B, P, J)
       logits = logits.masked_fill(mask.logical_not().unsqueeze(1), -std::numeric_limits<float>::infinity());
-      const at::Tensor lca_rows = batch.lca.gather(1, first.unsqueeze(-1).expand({b, p, batch.max_joints()}));
+      const at::Tensor lca_rows = batch.lca.gather(1, first.unsqueeze(-1).expand({b, p, j}));
       const at::Tensor target = lca_rows.gather(2, second.unsqueeze(-1)).squeeze(-1);  // (B, P)
       terms.lca = torch::nn::functional::cross_entropy(logits.reshape({b * p, -1}), target.reshape({b * p}));
       terms.lca_accuracy = (logits.argmax(-1) == target).to(h.scalar_type()).mean();
@@ -181,13 +202,15 @@ PretrainLosses OwoPretrainerImpl::evaluate(const GraphBatch& batch) {
 at::Tensor OwoPretrainerImpl::all_pair_lca_logits(const GraphBatch& batch) {
   if (!lca_query_) throw std::logic_error("OwoPretrainer::all_pair_lca_logits: the LCA task is switched off");
   torch::NoGradGuard no_grad;
-  const at::Tensor h = encoder->forward(batch).joints;  // (B, J, D)
+  const OwoOutput out = encoder->forward(batch);
+  const at::Tensor& h = out.joints;  // (B, J, D)
   const int64_t b = h.size(0), j = h.size(1), d = h.size(2);
   const at::Tensor query = lca_query_->forward(h.unsqueeze(2) + h.unsqueeze(1)).reshape({b, j * j, d});  // (B, J*J, D)
   const at::Tensor keys = lca_key_->forward(h);                                                        // (B, J, D)
   at::Tensor logits = torch::bmm(query, keys.transpose(1, 2)) / std::sqrt(static_cast<double>(d));    // (B, J*J, J)
   logits = logits.masked_fill(batch.joint_mask.logical_not().unsqueeze(1), -std::numeric_limits<float>::infinity());
-  return logits.reshape({b, j, j, j});
+  const at::Tensor ancestry = lca_ancestry_->forward(out.joints, out.joint_edges);  // (B, J, J): a(j1, k), a(j2, k)
+  return logits.reshape({b, j, j, j}) + ancestry.unsqueeze(2) + ancestry.unsqueeze(1);
 }
 
 at::Tensor OwoPretrainerImpl::predicted_offsets(const GraphBatch& batch) {

@@ -25,7 +25,8 @@
 namespace nec::owo {
 
 constexpr const char* kOwoCheckpointFormat = "nec-owo";  // config.json "format"
-constexpr int kOwoCheckpointVersion = 1;                  // config.json "version" this nec reads and writes
+// config.json "version" this nec reads and writes; 2: the LCA pointer's ancestry term (lca_ancestry.*).
+constexpr int kOwoCheckpointVersion = 2;
 
 // What a checkpoint records besides the architecture.
 struct OwoCheckpointInfo {

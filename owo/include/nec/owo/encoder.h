@@ -7,6 +7,7 @@
 //   OwoOutput out = encoder->forward(collate(graphs, config.name_dim));
 //   // out.joints (B, J, D): joint identity embeddings, zero at padding
 //   // out.skeleton (B, D): the global node, one embedding per skeleton
+//   // out.joint_edges (B, J, J, edge_dim): the joint-to-joint edges the last block read
 //
 // Node j attends to its sources k (the global node and, with tree_edges_only,
 // j itself, its parent and its children; otherwise every real joint). Padded
@@ -48,8 +49,9 @@ struct OwoConfig {
 };
 
 struct OwoOutput {
-  at::Tensor joints;    // (B, J, D) per-joint embeddings, zero at padding
-  at::Tensor skeleton;  // (B, D) global node embedding
+  at::Tensor joints;       // (B, J, D) per-joint embeddings, zero at padding
+  at::Tensor skeleton;     // (B, D) global node embedding
+  at::Tensor joint_edges;  // (B, J, J, edge_dim) incoming: [b, i, k] is the edge k -> i; zero where i or k is padding
 };
 
 // A two-layer perceptron Linear -> ReLU -> Linear, used by the blocks and heads.

@@ -1,12 +1,15 @@
 // How well a pretrained OwO model knows skeletons: per skeleton, the LCA
 // pointer's accuracy over all joint pairs, the error of the predicted rest
-// offsets, and whether the whole tree is rebuilt exactly from the predicted
-// LCA matrix (NECromancer appendix C.4, tree_rebuild.h). The matrix is the
-// model's argmax for every pair i != j; its diagonal is LCA(i, i) = i by
-// definition (the reconstruction of C.4 never asks for it).
+// offsets, and whether the whole tree is rebuilt from the predicted LCAs
+// (NECromancer appendix C.4, tree_rebuild.h), two ways: exactly from the
+// predicted LCA matrix (rebuild_tree; the matrix is the model's argmax for
+// every pair i != j, its diagonal LCA(i, i) = i by definition, which C.4
+// never asks for), and as the tree that best agrees with the predicted LCA
+// probabilities (decode_tree). Either counts only when its parent array is
+// the true one; the true tree is read for nothing else.
 //
 //   std::vector<SkeletonScore> scores = score_skeletons(*model, set.held_out, &vectors, torch::kCPU);
-//   ScoreSummary all = summarize(scores);   // all.rebuild_rate, all.lca_accuracy, all.offset_percent ...
+//   ScoreSummary all = summarize(scores);   // all.rebuild_rate, all.decode_rate, all.lca_accuracy ...
 #pragma once
 
 #include "nec/owo/pretrain.h"
@@ -29,6 +32,8 @@ struct SkeletonScore {
   int64_t correct_pairs = 0;   // pairs whose predicted LCA (argmax) is right
   bool rebuilt = false;        // the predicted LCA matrix gives back exactly the true parent array
   std::string rebuild_failure; // why not (rebuild_tree's message, or "a different tree"); empty when rebuilt
+  bool decoded = false;        // the tree decoded from the predicted LCA probabilities is the true parent array
+  int decoded_wrong_parents = 0;  // joints whose parent in that decoded tree is wrong
   double offset_error = 0.0;   // mean |predicted - true| rest offset over non-root joints, graph units
   double offset_percent = 0.0; // the same in per cent of the skeleton's diameter
   bool has_lca = false;        // the model has the LCA task
@@ -52,8 +57,10 @@ struct ScoreSummary {
   double mean_lca_accuracy = 0.0;     // mean of the per-skeleton accuracies
   double offset_error = 0.0;          // mean of the per-skeleton offset errors, graph units
   double offset_percent = 0.0;        // mean of the per-skeleton errors in per cent of the diameter
-  int rebuilt = 0;                    // skeletons rebuilt exactly
+  int rebuilt = 0;                    // skeletons rebuilt exactly from the predicted LCA matrix
   double rebuild_rate = 0.0;          // rebuilt / skeletons
+  int decoded = 0;                    // skeletons rebuilt from the predicted LCA probabilities
+  double decode_rate = 0.0;           // decoded / skeletons
 };
 
 ScoreSummary summarize(const std::vector<SkeletonScore>& scores);

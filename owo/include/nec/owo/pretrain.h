@@ -10,8 +10,14 @@
 // - offset:      predict each joint's rest offset from h_j (normalized units).
 // - pair_offset: predict p_k - p_j from [h_j || h_k] (eq. 13-14, the paper's
 //                "distance regression"), on sampled pairs.
-// - lca:         pointer over joints: q = FFN(h_j1 + h_j2), softmax_j q.k_j / sqrt(D),
+// - lca:         pointer over candidate joints k: q = FFN(h_j1 + h_j2), and
+//                logit_k = q.key_k / sqrt(D) + a(j1, k) + a(j2, k), softmax over k,
 //                cross-entropy against LCA(j1, j2) (eq. 15-18), on sampled pairs.
+//                a(i, k) = MLP([h_k || h_i || e_{k->i}]) reads the encoder's final
+//                edge k -> i: the LCA is the deepest k that is an ancestor-or-self
+//                of both joints, a sum of one term per joint, which the paper's
+//                dot product of (h_j1 + h_j2) with key_k alone rarely gets right
+//                on long chains (held-out snakes: 0.55 of pairs).
 //                By appendix C.4, right answers for all pairs determine the tree.
 // - name:        InfoNCE between FFN(h_j) and FFN(name_j) over the batch's named
 //                joints (eq. 19-21); skipped without name embeddings.
@@ -54,6 +60,25 @@ struct PretrainLosses {
   std::optional<double> grad_norm;    // global gradient norm before clipping (the clipping pretrain_step only)
 };
 
+// a(i, k) of the LCA pointer for every ordered joint pair: an MLP over
+// [h_k || h_i || e_{k->i}] whose first layer is split by input, so that no
+// (B, J, J, 2 D + edge_dim) concatenation is built.
+class PairScoreImpl : public torch::nn::Module {
+ public:
+  PairScoreImpl(int64_t dim, int64_t edge_dim);
+
+  // joints (B, J, D); joint_edges (B, J, J, edge_dim) incoming, [b, i, k] the
+  // edge k -> i (OwoOutput). Returns (B, J, J): [b, i, k] = a(i, k).
+  at::Tensor forward(const at::Tensor& joints, const at::Tensor& joint_edges);
+
+ private:
+  torch::nn::Linear candidate_{nullptr};  // h_k -> hidden D (with the bias)
+  torch::nn::Linear joint_{nullptr};      // h_i -> hidden D
+  torch::nn::Linear edge_{nullptr};       // e_{k->i} -> hidden D
+  torch::nn::Linear out_{nullptr};        // ReLU(hidden) -> 1
+};
+TORCH_MODULE(PairScore);
+
 // The encoder with its pretraining heads. Pairs are sampled with torch's
 // global generator (torch::manual_seed makes a run repeatable).
 class OwoPretrainerImpl : public torch::nn::Module {
@@ -89,6 +114,7 @@ class OwoPretrainerImpl : public torch::nn::Module {
   torch::nn::Sequential pair_offset_head_{nullptr};  // 2D -> D -> 3 (FFN_geo then W_geo)
   torch::nn::Sequential lca_query_{nullptr};         // D -> D -> D
   torch::nn::Sequential lca_key_{nullptr};           // D -> D -> D
+  PairScore lca_ancestry_{nullptr};                  // a(i, k): [D || D || edge_dim] -> D -> 1
   torch::nn::Sequential name_node_{nullptr};         // D -> D -> D
   torch::nn::Sequential name_text_{nullptr};         // E -> D -> D
 };
