@@ -133,7 +133,7 @@ TEST(Batch, ShapesMasksAndPadding) {
       EXPECT_EQ(b.skeletons[i].names, cache.skeleton_of(c).skeleton.names);
       EXPECT_EQ(b.canonical_names[i], cache.skeleton_of(c).canonical_names);
       Features crop = crop_features(cache, c, b.crop_starts[i], b.frame_counts[i]);
-      face_forward(crop);
+      turn_to_heading(crop, root_heading(crop_features(cache, c, 0, 1), 0));
       for (int t = 0; t < crop.frame_count; ++t) {
         for (int j = 0; j < crop.joint_count; ++j) {
           for (int k = 0; k < kFeatureSize; ++k) ASSERT_EQ(b.feature(i, t, j, k), crop.at(t, j, k));
@@ -296,31 +296,6 @@ Features item_features(const Batch& b, int i, const std::array<double, 2>& start
   return f;
 }
 
-// `got` turned about the vertical line through `start` to match `expected`
-// best (2-D Procrustes on x, z over the joints both have): batch items face +Z
-// at frame 0, the heading of the (augmented) root decides by how much.
-std::map<std::string, std::vector<Vec3>> turned_to_match(std::map<std::string, std::vector<Vec3>> got,
-                                                         const std::map<std::string, std::vector<Vec3>>& expected,
-                                                         const std::array<double, 2>& start) {
-  double dot = 0.0, cross = 0.0;
-  for (const auto& [name, positions] : got) {
-    const auto found = expected.find(name);
-    if (found == expected.end()) continue;
-    for (size_t t = 0; t < positions.size(); ++t) {
-      const double gx = positions[t].x() - start[0], gz = positions[t].z() - start[1];
-      const double ex = found->second[t].x() - start[0], ez = found->second[t].z() - start[1];
-      dot += gx * ex + gz * ez;
-      cross += gz * ex - gx * ez;
-    }
-  }
-  const Mat3 turn = Eigen::AngleAxisd(std::atan2(cross, dot), Vec3::UnitY()).toRotationMatrix();
-  const Vec3 origin(start[0], 0.0, start[1]);
-  for (auto& [name, positions] : got) {
-    for (Vec3& p : positions) p = origin + turn * (p - origin);
-  }
-  return got;
-}
-
 TEST(Batch, AugmentationChangesTheRigConsistently) {
   const DatasetCache cache = synthetic_cache(16);
   struct Case {
@@ -364,10 +339,11 @@ TEST(Batch, AugmentationChangesTheRigConsistently) {
         // All but bone length keep the global positions of the joints both
         // rigs have: decode the batch rows and compare.
         if (kind.kind != AugmentKind::BoneLength) {
-          const Features crop = crop_features(cache, c, b.crop_starts[i], b.frame_counts[i]);
+          // Crops are turned to their clip's start heading before the rig changes.
+          Features crop = crop_features(cache, c, b.crop_starts[i], b.frame_counts[i]);
+          turn_to_heading(crop, root_heading(crop_features(cache, c, 0, 1), 0));
           const auto expected = positions_by_name(original.skeleton, crop);
-          const auto got =
-              turned_to_match(positions_by_name(s, item_features(b, i, crop.start_xz)), expected, crop.start_xz);
+          const auto got = positions_by_name(s, item_features(b, i, crop.start_xz));
           for (const auto& [name, positions] : got) {
             const auto found = expected.find(name);
             if (found == expected.end()) continue;

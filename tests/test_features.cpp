@@ -48,27 +48,35 @@ TEST(Features, InvariantToWorldYaw) {
   }
 }
 
-TEST(Features, FaceForwardRemovesTheStartHeadingOnly) {
+TEST(Features, TurnToHeadingTurnsTheWholeMotionAboutItsStart) {
   std::mt19937 rng(44);
   const Skeleton s = testing::random_skeleton(rng, 5);
   Motion m = testing::random_motion(rng, s, 6);
-  Features reference = encode_features(s, m);
-  const double reference_angle = face_forward(reference);
-  EXPECT_NEAR(heading_angle(Quat(m.rotation(0, 0))), reference_angle, 1e-6);
-  // Facing +Z already: a second call removes nothing.
-  Features again = reference;
-  EXPECT_NEAR(face_forward(again), 0.0, 1e-6);
+  const Features original = encode_features(s, m);
+  const double start = heading_angle(Quat(m.rotation(0, 0)));
+  for (int t : {0, 4}) {
+    const double expected = heading_angle(Quat(m.rotation(t, 0)));
+    EXPECT_LE(std::abs(root_heading(original, t)), M_PI);
+    EXPECT_NEAR(std::remainder(root_heading(original, t) - expected, 2.0 * M_PI), 0.0, 1e-6) << "frame " << t;
+  }
+  EXPECT_THROW(root_heading(original, 6), std::out_of_range);
 
-  // The same motion turned 57 degrees about +Y faces forward to the same features.
+  // Turned to its own heading: nothing changes.
+  Features same = original;
+  EXPECT_NEAR(turn_to_heading(same, start), 0.0, 1e-6);
+  for (size_t k = 0; k < same.data.size(); ++k) EXPECT_NEAR(same.data[k], original.data[k], 1e-6) << k;
+
+  // The same motion turned 57 degrees about +Y (around the origin, where it
+  // starts) turns back to the original features, every frame and joint.
   const Quat yaw = axis_rotation(1, 57.0);
   for (int t = 0; t < m.frame_count; ++t) {
     m.rotation(t, 0) = yaw * m.rotation(t, 0);
     m.translation(t, 0) = yaw * m.translation(t, 0);
   }
   Features turned = encode_features(s, m);
-  const double removed = face_forward(turned);
-  EXPECT_NEAR(std::remainder(removed - reference_angle - 57.0 * M_PI / 180.0, 2.0 * M_PI), 0.0, 1e-5);
-  for (size_t k = 0; k < turned.data.size(); ++k) EXPECT_NEAR(turned.data[k], reference.data[k], 1e-5) << k;
+  EXPECT_NEAR(std::remainder(root_heading(turned, 0) - start - 57.0 * M_PI / 180.0, 2.0 * M_PI), 0.0, 1e-5);
+  EXPECT_NEAR(turn_to_heading(turned, start), -57.0 * M_PI / 180.0, 1e-5);
+  for (size_t k = 0; k < turned.data.size(); ++k) EXPECT_NEAR(turned.data[k], original.data[k], 1e-5) << k;
 }
 
 void expect_inverse(const Skeleton& s, const Motion& m, double tolerance) {

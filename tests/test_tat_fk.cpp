@@ -222,40 +222,45 @@ TEST(TatFk, GradientsMatchFiniteDifferences) {
   EXPECT_GT(offset_grad.abs().sum().item<double>(), 0.0);
 }
 
-// Windows cut from a clip that turns, each faced forward as the tokenizer
-// encodes them (the same as motion's face_forward), then continued from one
-// another as decoding does: the clip's own orientations come back.
-TEST(TatFk, WindowsFacedForwardAndContinuedGiveTheClipBack) {
+// Windows cut from a clip that turns, each turned to the clip's start heading
+// as the tokenizer encodes them (the same as motion's turn_to_heading on
+// training crops), then continued from one another as decoding does: the
+// clip's own orientations come back.
+TEST(TatFk, WindowsAlignedToTheStartHeadingAndContinuedGiveTheClipBack) {
   std::mt19937 rng(71);
   const Skeleton s = testing::random_skeleton(rng, 5);
   Features clip = encode_features(s, testing::random_motion(rng, s, 20));
-  face_forward(clip);  // as preprocessing leaves every clip
+  turn_to_heading(clip, 2.0);  // a clip whose root does not face +Z at its start
   const at::Tensor all = torch::from_blob(clip.data.data(), {20, 5, 9}, torch::kFloat32).clone();
   const std::vector<int64_t> starts{0, 6, 12};
   std::vector<at::Tensor> cut;
   for (int64_t start : starts) cut.push_back(all.narrow(0, start, 8));
   const at::Tensor windows = torch::stack(cut);  // (3, 8, 5, 9)
 
-  const at::Tensor faced = tat::face_windows_forward(windows);
+  const at::Tensor aligned = tat::align_window_headings(windows);
+  EXPECT_TRUE(torch::allclose(aligned[0], windows[0], 1e-6, 1e-6));
   for (size_t k = 0; k < starts.size(); ++k) {
-    Features crop;
+    Features crop;  // as training crops are turned
     crop.frame_count = 8;
     crop.joint_count = 5;
     crop.data.assign(cut[k].data_ptr<float>(), cut[k].data_ptr<float>() + cut[k].numel());
-    const double removed = face_forward(crop);
-    if (k > 0) EXPECT_GT(std::abs(removed), 1e-3) << "window " << k << " should need turning";
+    const double turned = turn_to_heading(crop, root_heading(clip, 0));
+    if (k > 0) {
+      EXPECT_GT(std::abs(turned), 1e-3) << "window " << k << " should need turning";
+    }
     const at::Tensor expected = torch::from_blob(crop.data.data(), {8, 5, 9}, torch::kFloat32);
-    EXPECT_TRUE(torch::allclose(faced[k], expected, 1e-5, 1e-5)) << "window " << k;
+    EXPECT_TRUE(torch::allclose(aligned[k], expected, 1e-5, 1e-5)) << "window " << k;
   }
-  const at::Tensor continued = tat::continue_window_headings(faced, starts);
+  const at::Tensor continued = tat::continue_window_headings(aligned, starts);
   EXPECT_TRUE(torch::allclose(continued, windows, 1e-4, 1e-4))
       << "max difference " << (continued - windows).abs().max().item<double>();
-  EXPECT_THROW(tat::continue_window_headings(faced, {0, 6}), std::invalid_argument);
-  EXPECT_THROW(tat::continue_window_headings(faced, {0, 6, 6}), std::invalid_argument);  // not in order
-  EXPECT_THROW(tat::continue_window_headings(faced, {0, 6, 15}), std::invalid_argument);  // a gap
+  EXPECT_THROW(tat::continue_window_headings(aligned, {0, 6}), std::invalid_argument);
+  EXPECT_THROW(tat::continue_window_headings(aligned, {0, 6, 6}), std::invalid_argument);  // not in order
+  EXPECT_THROW(tat::continue_window_headings(aligned, {0, 6, 15}), std::invalid_argument);  // a gap
+  EXPECT_THROW(tat::align_window_headings(torch::zeros({0, 8, 5, 9})), std::invalid_argument);
 
   // Back to back (no overlap): each window starts with the heading the one before ends with.
-  const at::Tensor back_to_back = tat::continue_window_headings(faced, {0, 8, 16});
+  const at::Tensor back_to_back = tat::continue_window_headings(aligned, {0, 8, 16});
   for (int64_t k = 1; k < 3; ++k) {
     const at::Tensor before = tat::heading_matrix(tat::rot6d_to_matrix(back_to_back[k - 1][7][0].narrow(0, 3, 6)));
     const at::Tensor after = tat::heading_matrix(tat::rot6d_to_matrix(back_to_back[k][0][0].narrow(0, 3, 6)));

@@ -215,6 +215,8 @@ Batch BatchLoader::assemble(const std::vector<int>& order, int epoch, int index)
       item.crop_start = static_cast<int>(random.below(static_cast<uint64_t>(c.frame_count - count + 1)));
     }
     item.features = crop_features(cache_, item.clip, item.crop_start, count);
+    // Every crop starts with the heading of its clip's start, where the body faces +Z.
+    turn_to_heading(item.features, root_heading(crop_features(cache_, item.clip, 0, 1), 0));
     item.skeleton = stored.skeleton;
     item.canonical_names = stored.canonical_names;
 
@@ -233,7 +235,6 @@ Batch BatchLoader::assemble(const std::vector<int>& order, int epoch, int index)
       item.skeleton = std::move(changed.skeleton);
       item.augmented = true;
     }
-    face_forward(item.features);
     items.push_back(std::move(item));
   }
 

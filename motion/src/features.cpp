@@ -1,7 +1,9 @@
 // Θ encoding and its exact inverse.
 #include "nec/motion/features.h"
 
+#include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace nec {
 
@@ -50,17 +52,31 @@ Motion decode_features(const Skeleton& skeleton, const Features& f) {
   return m;
 }
 
-double face_forward(Features& f) {
+namespace {
+
+Mat3 root_rotation(const Features& f, int frame) {
+  Rot6 r6;
+  for (int k = 0; k < 6; ++k) r6[k] = f.at(frame, 0, 3 + k);
+  return rot6d_to_matrix(r6);
+}
+
+}  // namespace
+
+double root_heading(const Features& f, int frame) {
+  if (frame < 0 || frame >= f.frame_count || f.joint_count == 0) {
+    throw std::out_of_range("root_heading: frame " + std::to_string(frame) + " of a clip of " +
+                            std::to_string(f.frame_count) + " frames and " + std::to_string(f.joint_count) +
+                            " joints");
+  }
+  return std::remainder(heading_angle(Quat(root_rotation(f, frame))), 2.0 * M_PI);
+}
+
+double turn_to_heading(Features& f, double heading) {
   if (f.frame_count == 0 || f.joint_count == 0) return 0.0;
-  auto root_rotation = [&](int t) {
-    Rot6 r6;
-    for (int k = 0; k < 6; ++k) r6[k] = f.at(t, 0, 3 + k);
-    return rot6d_to_matrix(r6);
-  };
-  const double angle = heading_angle(Quat(root_rotation(0)));
-  const Mat3 undo = Eigen::AngleAxisd(-angle, Vec3::UnitY()).toRotationMatrix();
+  const double angle = std::remainder(heading - root_heading(f, 0), 2.0 * M_PI);
+  const Mat3 turn = Eigen::AngleAxisd(angle, Vec3::UnitY()).toRotationMatrix();
   for (int t = 0; t < f.frame_count; ++t) {
-    const Rot6 r6 = matrix_to_rot6d(undo * root_rotation(t));
+    const Rot6 r6 = matrix_to_rot6d(turn * root_rotation(f, t));
     for (int k = 0; k < 6; ++k) f.at(t, 0, 3 + k) = static_cast<float>(r6[k]);
   }
   return angle;

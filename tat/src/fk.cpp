@@ -86,11 +86,13 @@ at::Tensor root_heading_at(const at::Tensor& windows, int64_t frame) {
 
 }  // namespace
 
-at::Tensor face_windows_forward(const at::Tensor& windows) {
-  if (windows.dim() != 4 || windows.size(3) != 9 || windows.size(1) == 0 || windows.size(2) == 0) {
-    throw std::invalid_argument("face_windows_forward: windows must be (N, L > 0, J > 0, 9)");
+at::Tensor align_window_headings(const at::Tensor& windows) {
+  if (windows.dim() != 4 || windows.size(3) != 9 || windows.size(0) == 0 || windows.size(1) == 0 ||
+      windows.size(2) == 0) {
+    throw std::invalid_argument("align_window_headings: windows must be (N > 0, L > 0, J > 0, 9)");
   }
-  return turn_root_orientations(windows, root_heading_at(windows, 0).transpose(-1, -2));
+  const at::Tensor start = root_heading_at(windows.narrow(0, 0, 1), 0);  // (1, 3, 3)
+  return turn_root_orientations(windows, torch::matmul(start, root_heading_at(windows, 0).transpose(-1, -2)));
 }
 
 at::Tensor continue_window_headings(const at::Tensor& windows, const std::vector<int64_t>& starts) {

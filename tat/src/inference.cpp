@@ -130,7 +130,7 @@ at::Tensor encode_clip(TokenizerImpl& tokenizer, const Features& features, const
   }
   c10::InferenceMode inference;
   const auto [batch_embeddings, mask] = skeleton_inputs(embeddings, joints, count);
-  const at::Tensor latent = tokenizer.encode(face_windows_forward(torch::stack(crops)), mask, batch_embeddings);
+  const at::Tensor latent = tokenizer.encode(align_window_headings(torch::stack(crops)), mask, batch_embeddings);
   const at::Tensor codes = tokenizer.quantize(latent).codes;  // (n, length / r, R)
 
   std::vector<at::Tensor> owned;
@@ -164,7 +164,7 @@ Features decode_clip(TokenizerImpl& tokenizer, const at::Tensor& codes, int fram
   }
   const auto [batch_embeddings, mask] = skeleton_inputs(embeddings, joint_count, count);
   const at::Tensor latent = tokenizer.codes_to_latent(torch::stack(window_codes));
-  // Each window faces +Z at its start, as it was encoded: turn it to go on from the one before.
+  // Each window starts with the clip's start heading, as it was encoded: turn it to go on from the one before.
   at::Tensor decoded = continue_window_headings(
       tokenizer.decode(latent, mask, batch_embeddings).to(torch::kFloat32), plan.starts);  // (n, length, J, 9)
   // Blend in a space where windows agree: absolute root height instead of Δy.

@@ -48,8 +48,8 @@ struct Batch {
   int frames = 0;      // T, frames per item (crop_frames, or the longest clip when crop_frames = 0)
   int max_joints = 0;  // Jmax, most joints of any item (after augmentation)
 
-  std::vector<float> features;      // (B, T, Jmax, 9) Θ, each item turned to face +Z at its frame 0
-                                    // (face_forward); zero outside frame_mask × joint_mask
+  std::vector<float> features;      // (B, T, Jmax, 9) Θ, each item turned to its clip's start heading
+                                    // (turn_to_heading); zero outside frame_mask × joint_mask
   std::vector<uint8_t> joint_mask;  // (B, Jmax) 1 for the item's joints
   std::vector<uint8_t> frame_mask;  // (B, T) 1 for the item's frames
   std::vector<int32_t> parents;     // (B, Jmax) parent index; -1 for roots and padding

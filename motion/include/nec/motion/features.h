@@ -34,12 +34,15 @@ Features encode_features(const Skeleton& skeleton, const Motion& motion);
 // Non-root joints get the skeleton's rest offsets as translations.
 Motion decode_features(const Skeleton& skeleton, const Features& features);
 
-// Turns the motion about +Y (around its start point) so that frame 0 faces +Z:
-// every root orientation is premultiplied by the inverse of frame 0's heading.
-// The displacements, in each frame's own heading frame, stay as they are.
-// Training crops and tokenizer windows start this way, so that the tokens
-// hold how a motion turns, never where it happens to face. Returns the
-// heading angle removed (radians about +Y).
-double face_forward(Features& features);
+// Heading of the root at `frame`: radians about +Y in [-pi, pi] (nec::heading_angle).
+double root_heading(const Features& features, int frame);
+// Turns the motion about +Y (around its start point) so that the root's
+// heading at frame 0 becomes `heading`: every root orientation is
+// premultiplied by the same turn; the displacements, in each frame's own
+// heading frame, stay as they are. Training crops start with the heading of
+// their clip's frame 0 (where preprocessing made the body face +Z), and so do
+// tokenizer windows: the tokens hold how a motion turns, never where it
+// happens to face. Returns the angle turned (radians about +Y).
+double turn_to_heading(Features& features, double heading);
 
 }  // namespace nec

@@ -28,15 +28,17 @@ at::Tensor matrix_to_rot6d(const at::Tensor& matrix);
 // where the heading is undefined (rotation by pi about a horizontal axis).
 at::Tensor heading_matrix(const at::Tensor& rotation);
 
-// Windows (N, L, J, 9) each turned about +Y so that its frame 0 faces +Z, as
-// nec::face_forward turns one clip (the root orientations only). A copy.
-at::Tensor face_windows_forward(const at::Tensor& windows);
+// Windows (N, L, J, 9) of one clip, each turned about +Y so that its frame 0
+// has the heading of window 0's frame 0 (the clip's start), as
+// nec::turn_to_heading turns training crops (the root orientations only).
+// Window 0 stays. A copy.
+at::Tensor align_window_headings(const at::Tensor& windows);
 // The inverse across a clip cut into windows starting at `starts` (frames,
 // increasing, overlapping or back to back): window 0 stays; every later
 // window is turned about +Y so that its frame 0 has the heading that the
 // window before it (already turned) has at that frame, or at its last frame
-// when they do not overlap. Decoded windows that each face +Z so continue one
-// another's turning. A copy.
+// when they do not overlap. Decoded windows that each start with the clip's
+// start heading so continue one another's turning. A copy.
 at::Tensor continue_window_headings(const at::Tensor& windows, const std::vector<int64_t>& starts);
 
 struct FkResult {
