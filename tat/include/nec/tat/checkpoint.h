@@ -1,7 +1,7 @@
 // TAT checkpoints: a trained tokenizer together with the frozen OwO encoder it
 // was trained with, so one directory is all `nec encode|decode|transfer` need.
 //
-//   <dir>/config.json   {"format": "nec-tat", "version": 4, "architecture": "Tokenizer",
+//   <dir>/config.json   {"format": "nec-tat", "version": 5, "architecture": "Tokenizer",
 //                        "tokenizer": TatConfig, "window_frames": 64, "fps": 30,
 //                        "training_step": 4000, "data": "cache/ (1,036 clips)",
 //                        "training": {... free-form state for --resume ...},
@@ -29,9 +29,10 @@ class Optimizer;
 namespace nec::tat {
 
 constexpr const char* kTatCheckpointFormat = "nec-tat";
-constexpr int kTatCheckpointVersion = 4;  // 2: the encoder scales the root displacement up; 3: the decoder
+constexpr int kTatCheckpointVersion = 5;  // 2: the encoder scales the root displacement up; 3: the decoder
                                            // predicts it scaled; 4: windows start with the clip's start
-                                           // heading (turn_to_heading, align_window_headings)
+                                           // heading (turn_to_heading, align_window_headings); 5: the
+                                           // virtual joint starts from the root joint's input
 
 struct TatCheckpointInfo {
   int64_t window_frames = 64;   // training window T, e.g. 64; inference uses windows of this size
