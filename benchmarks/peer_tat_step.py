@@ -204,7 +204,9 @@ class NecEncoder(nn.Module):
         """(B, T, J, 9) -> latent (B, T / r, C)."""
         b, t = features.shape[:2]
         joints = self.input(features) + self.embedding(joint_embeddings).unsqueeze(1)
-        tokens = torch.cat([self.virtual_joint.expand(b, t, 1, self.virtual_joint.size(0)), joints], 2)
+        # The virtual joint starts as the learnt vector plus the root joint's input.
+        virtual_joint = self.virtual_joint.view(1, 1, 1, -1) + joints[:, :, :1]
+        tokens = torch.cat([virtual_joint, joints], 2)
         bias = key_bias(joint_mask)
         blocks = len(self.temporal)
         for block in range(blocks):
