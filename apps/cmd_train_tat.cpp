@@ -87,6 +87,7 @@ int run_train_tat(int argc, char** argv) {
     }
     tokenizer = resumed->tokenizer;
   } else {
+    torch::manual_seed(static_cast<uint64_t>(config.seed));  // the initial weights and codebooks
     tokenizer = tat::Tokenizer(config.model);
   }
 

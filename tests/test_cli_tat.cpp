@@ -17,6 +17,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::CommandResult;
+using testing::last_line_starting;
 using testing::run_nec;
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
@@ -95,6 +96,23 @@ TEST_F(CliTat, TrainingWritesACheckpointAndResumes) {
                                          shared("cache") + " --out " + path("tat") + " --resume --steps 9 --threads 1");
   EXPECT_EQ(mismatch.exit_code, 1) << mismatch.output;
   EXPECT_TRUE(contains(mismatch.output, "differs")) << mismatch.output;
+}
+
+TEST_F(CliTat, TheSameSeedTrainsTheSameModel) {
+  auto train = [&](const std::string& out, int seed) {
+    nlohmann::json config = nlohmann::json::parse(tat_config());
+    config["seed"] = seed;
+    const CommandResult run = run_nec("train tat --config " + dir_.write(out + ".json", config.dump()) + " --data " +
+                                      shared("cache") + " --owo " + shared("owo") + " --out " + path(out) +
+                                      " --steps 4 --threads 1");
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    return last_line_starting(run.output, "step 4/4");
+  };
+  auto losses = [](const std::string& line) { return line.substr(line.find("loss")); };
+  const std::string first = train("first", 1), again = train("again", 1), other = train("other", 2);
+  ASSERT_FALSE(first.empty());
+  EXPECT_EQ(losses(first), losses(again));
+  EXPECT_NE(losses(first), losses(other));
 }
 
 TEST_F(CliTat, BaselinesTrainInTheSameLoop) {

@@ -20,23 +20,10 @@ namespace {
 namespace fs = std::filesystem;
 
 using testing::CommandResult;
+using testing::last_line_starting;
 using testing::run_nec;
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-
-// The last line of `output` that starts with `prefix`.
-std::string last_line_starting(const std::string& output, const std::string& prefix) {
-  std::string found;
-  size_t start = 0;
-  while (start < output.size()) {
-    size_t end = output.find('\n', start);
-    if (end == std::string::npos) end = output.size();
-    const std::string line = output.substr(start, end - start);
-    if (line.rfind(prefix, 0) == 0) found = line;
-    start = end + 1;
-  }
-  return found;
-}
 
 // A tiny model that takes a step in milliseconds; one line per step. The
 // learning rate is constant after warm-up, so a run to step 4 resumed to step 7

@@ -211,6 +211,10 @@ LossTerms backward_in_parts(Tokenizer& tokenizer, const BatchTensors& batch, con
 }
 
 LossTerms TatTrainer::step(const Batch& batch, int64_t step_index) {
+  // The step's random draws (quantize dropout, dead-code reset) depend on the
+  // seed and the step alone: a run is repeatable, and a resumed run takes the
+  // steps of one that never stopped.
+  torch::manual_seed(static_cast<uint64_t>(config_.seed) * 1000003u + static_cast<uint64_t>(step_index));
   const double lr = learning_rate_at(config_, step_index);
   for (auto& group : optimizer_->param_groups()) static_cast<torch::optim::AdamWOptions&>(group.options()).lr(lr);
   const Inputs in = inputs(batch);

@@ -26,6 +26,19 @@ CommandResult run_nec(const std::string& arguments) {
   return run;
 }
 
+std::string last_line_starting(const std::string& output, const std::string& prefix) {
+  std::string found;
+  size_t start = 0;
+  while (start < output.size()) {
+    size_t end = output.find('\n', start);
+    if (end == std::string::npos) end = output.size();
+    const std::string line = output.substr(start, end - start);
+    if (line.rfind(prefix, 0) == 0) found = line;
+    start = end + 1;
+  }
+  return found;
+}
+
 std::string shared_data_dir() {
   const std::string dir = NEC_SHARED_DATA_DIR;
   return std::filesystem::is_directory(dir) ? dir : std::string();

@@ -48,6 +48,8 @@ struct CommandResult {
   std::string output;
 };
 CommandResult run_nec(const std::string& arguments);
+// The last line of `output` that starts with `prefix` ("" if none), e.g. the last "step 4/4" of a training log.
+std::string last_line_starting(const std::string& output, const std::string& prefix);
 
 // Largest distance between corresponding positions of two pose sets.
 double max_position_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b);

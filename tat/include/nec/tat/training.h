@@ -47,7 +47,7 @@ struct TatTrainConfig {
   int64_t validate_every = 500;
   int64_t validation_batches = 8;
   int64_t checkpoint_every = 500;
-  uint64_t seed = 0;
+  uint64_t seed = 0;  // batches, initial weights and every step's random draws: a run repeats exactly on CPU
 
   // Throws std::invalid_argument naming the first bad field.
   void validate() const;
