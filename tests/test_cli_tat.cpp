@@ -113,6 +113,24 @@ TEST_F(CliTat, TheSameSeedTrainsTheSameModel) {
   ASSERT_FALSE(first.empty());
   EXPECT_EQ(losses(first), losses(again));
   EXPECT_NE(losses(first), losses(other));
+
+  // With a constant learning rate, a run stopped at step 2 and resumed to 4 takes the steps of "first".
+  nlohmann::json constant = nlohmann::json::parse(tat_config());
+  constant["final_learning_rate"] = constant["learning_rate"];
+  constant["warmup_steps"] = 0;
+  constant["checkpoint_every"] = 2;
+  const std::string config = dir_.write("constant.json", constant.dump());
+  auto run = [&](const std::string& out, const std::string& extra) {
+    return run_nec("train tat --config " + config + " --data " + shared("cache") + " --owo " + shared("owo") +
+                   " --out " + path(out) + " --threads 1 " + extra);
+  };
+  const CommandResult straight = run("straight", "--steps 4");
+  ASSERT_EQ(straight.exit_code, 0) << straight.output;
+  ASSERT_EQ(run("stopped", "--steps 2").exit_code, 0);
+  const CommandResult resumed = run("stopped", "--steps 4 --resume");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_EQ(losses(last_line_starting(resumed.output, "step 4/4")),
+            losses(last_line_starting(straight.output, "step 4/4")));
 }
 
 TEST_F(CliTat, BaselinesTrainInTheSameLoop) {
