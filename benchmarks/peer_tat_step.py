@@ -40,6 +40,7 @@ FEED_FORWARD_MULT = 2    # tokenizer.cpp kFeedForwardMult
 MASKED_SCORE = -1e9      # tokenizer.cpp kMaskedScore
 LAPLACE_EPSILON = 1e-5   # quantizer.cpp kLaplaceEpsilon
 TINY_SQUARED_NORM = 1e-20  # fk.cpp kTinySquaredNorm
+ROOT_DISPLACEMENT_SCALE = 20.0  # tokenizer.h kRootDisplacementScale
 
 
 # ---- Configuration (defaults of tat/include/nec/tat/{training,tokenizer,quantizer,loss}.h) ----
@@ -184,10 +185,7 @@ class NecEncoder(nn.Module):
     def __init__(self, c):
         super().__init__()
         d = c["dim"]
-        # tokenizer.cpp builds this MLP as Sequential(Linear(9, d), ReLU(), Linear(d, d)); GCC evaluates
-        # those constructor arguments right to left, so Linear(d, d) draws its initial weights first.
-        hidden = nn.Linear(d, d)
-        self.input = nn.Sequential(nn.Linear(9, d), nn.ReLU(), hidden)
+        self.input = nn.Sequential(nn.Linear(9, d), nn.ReLU(), nn.Linear(d, d))  # built in this order, as tokenizer.cpp
         self.embedding = nn.Linear(c["joint_embedding_dim"], d)
         self.virtual_joint = nn.Parameter(torch.randn(d) * 0.02)
         self.temporal = nn.ModuleList()
@@ -255,8 +253,11 @@ class NecDecoder(nn.Module):
 
 # ---- Residual quantizer (quantizer.cpp) ----
 
-def sample_rows(rows, weight, count):
-    return rows.index_select(0, torch.multinomial(weight, count, replacement=True))
+def sample_rows(rows, weight, error, count):
+    """count rows drawn with replacement, row i with a chance proportional to weight_i |error_i|^2 (k-means++)."""
+    squared = torch.nan_to_num(weight * error.pow(2).sum(1), 0.0, 0.0, 0.0)
+    chance = squared + weight * (1e-6 * squared.max()).clamp_min(1e-12)
+    return rows.index_select(0, torch.multinomial(chance, count, replacement=True))
 
 
 class ResidualQuantizer(nn.Module):
@@ -294,7 +295,7 @@ class ResidualQuantizer(nn.Module):
             for r in range(used_layers):
                 codebook = self.codebooks[r]
                 if seed:
-                    codebook.copy_(sample_rows(residual, weight, size))
+                    codebook.copy_(sample_rows(residual, weight, residual, size))
                     self.ema_sums[r].copy_(codebook)
                     self.ema_counts[r].fill_(1.0)
                 distance = torch.addmm((codebook * codebook).sum(1).unsqueeze(0), residual, codebook.t(),
@@ -317,7 +318,7 @@ class ResidualQuantizer(nn.Module):
                     threshold = c["dead_code_threshold"]
                     if threshold > 0:
                         dead = (self.ema_counts[r] < threshold).unsqueeze(1)
-                        fresh = sample_rows(residual, weight, size)
+                        fresh = sample_rows(residual, weight, residual - chosen, size)
                         codebook.copy_(torch.where(dead, fresh, codebook))
                         self.ema_sums[r].copy_(torch.where(dead, fresh * threshold, self.ema_sums[r]))
                         self.ema_counts[r].masked_fill_(dead.squeeze(1), threshold)
@@ -332,6 +333,14 @@ class ResidualQuantizer(nn.Module):
         return latent + (quantized - latent).detach(), codes, commitment, perplexity
 
 
+def scale_root_displacement(features, factor):
+    """A copy of features (..., J, 9) with the root's x and z displacement times factor."""
+    scaled = features.clone()
+    scaled[..., 0, 0] *= factor
+    scaled[..., 0, 2] *= factor
+    return scaled
+
+
 class Tokenizer(nn.Module):
     def __init__(self, c):
         super().__init__()
@@ -342,12 +351,14 @@ class Tokenizer(nn.Module):
 
     def forward(self, features, joint_mask, frame_mask, joint_embeddings):
         joint_mask = joint_mask.to(torch.bool)
-        latent = self.encoder(features, joint_mask, joint_embeddings)  # (B, S, C)
+        latent = self.encoder(scale_root_displacement(features, ROOT_DISPLACEMENT_SCALE), joint_mask,
+                              joint_embeddings)  # (B, S, C)
         b, s, code_dim = latent.shape
         step_mask = frame_mask.to(torch.bool).reshape(b, s, self.downsampling).any(-1)
         quantized, codes, commitment, perplexity = self.quantizer(latent.reshape(b * s, code_dim),
                                                                   step_mask.reshape(b * s))
-        reconstruction = self.decoder(quantized.view(b, s, code_dim), joint_mask, joint_embeddings)
+        reconstruction = scale_root_displacement(self.decoder(quantized.view(b, s, code_dim), joint_mask,
+                                                              joint_embeddings), 1.0 / ROOT_DISPLACEMENT_SCALE)
         return reconstruction, codes.view(b, s, -1), commitment, perplexity
 
 
@@ -424,7 +435,8 @@ def reconstruction_loss(prediction, x, commitment, w):
     real = frame.view(b, t, 1) * x["joint_mask"].to(prediction.dtype).view(b, 1, j)
     target = x["features"]
     rotation = masked_l1(prediction.narrow(-1, 3, 6), target.narrow(-1, 3, 6), real)
-    root = masked_l1(prediction.select(2, 0).narrow(-1, 0, 3), target.select(2, 0).narrow(-1, 0, 3), frame)
+    root = masked_l1(scale_root_displacement(prediction, ROOT_DISPLACEMENT_SCALE).select(2, 0).narrow(-1, 0, 3),
+                     scale_root_displacement(target, ROOT_DISPLACEMENT_SCALE).select(2, 0).narrow(-1, 0, 3), frame)
     predicted = features_to_positions(prediction, x["parents"], x["offsets"])
     with torch.no_grad():
         expected = features_to_positions(target, x["parents"], x["offsets"])
