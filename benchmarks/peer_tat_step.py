@@ -435,8 +435,9 @@ def reconstruction_loss(prediction, x, commitment, w):
     real = frame.view(b, t, 1) * x["joint_mask"].to(prediction.dtype).view(b, 1, j)
     target = x["features"]
     rotation = masked_l1(prediction.narrow(-1, 3, 6), target.narrow(-1, 3, 6), real)
-    root = masked_l1(scale_root_displacement(prediction, ROOT_DISPLACEMENT_SCALE).select(2, 0).narrow(-1, 0, 3),
-                     scale_root_displacement(target, ROOT_DISPLACEMENT_SCALE).select(2, 0).narrow(-1, 0, 3), frame)
+    scaled_root = [scale_root_displacement(f[:, :, :1], ROOT_DISPLACEMENT_SCALE).select(2, 0).narrow(-1, 0, 3)
+                   for f in (prediction, target)]
+    root = masked_l1(scaled_root[0], scaled_root[1], frame)
     predicted = features_to_positions(prediction, x["parents"], x["offsets"])
     with torch.no_grad():
         expected = features_to_positions(target, x["parents"], x["offsets"])

@@ -132,8 +132,7 @@ TEST(Batch, ShapesMasksAndPadding) {
       EXPECT_EQ(b.augmented[i], 0);
       EXPECT_EQ(b.skeletons[i].names, cache.skeleton_of(c).skeleton.names);
       EXPECT_EQ(b.canonical_names[i], cache.skeleton_of(c).canonical_names);
-      Features crop = crop_features(cache, c, b.crop_starts[i], b.frame_counts[i]);
-      turn_to_heading(crop, root_heading(crop_features(cache, c, 0, 1), 0));
+      const Features crop = crop_at_start_heading(cache, c, b.crop_starts[i], b.frame_counts[i]);
       for (int t = 0; t < crop.frame_count; ++t) {
         for (int j = 0; j < crop.joint_count; ++j) {
           for (int k = 0; k < kFeatureSize; ++k) ASSERT_EQ(b.feature(i, t, j, k), crop.at(t, j, k));
@@ -340,8 +339,7 @@ TEST(Batch, AugmentationChangesTheRigConsistently) {
         // rigs have: decode the batch rows and compare.
         if (kind.kind != AugmentKind::BoneLength) {
           // Crops are turned to their clip's start heading before the rig changes.
-          Features crop = crop_features(cache, c, b.crop_starts[i], b.frame_counts[i]);
-          turn_to_heading(crop, root_heading(crop_features(cache, c, 0, 1), 0));
+          const Features crop = crop_at_start_heading(cache, c, b.crop_starts[i], b.frame_counts[i]);
           const auto expected = positions_by_name(original.skeleton, crop);
           const auto got = positions_by_name(s, item_features(b, i, crop.start_xz));
           for (const auto& [name, positions] : got) {

@@ -99,31 +99,29 @@ TEST_F(CliTat, TrainingWritesACheckpointAndResumes) {
 }
 
 TEST_F(CliTat, TheSameSeedTrainsTheSameModel) {
-  auto train = [&](const std::string& out, int seed) {
+  auto train = [&](const nlohmann::json& config, const std::string& out, const std::string& extra) {
+    return run_nec("train tat --config " + dir_.write(out + ".json", config.dump()) + " --data " + shared("cache") +
+                   " --owo " + shared("owo") + " --out " + path(out) + " --threads 1 " + extra);
+  };
+  auto seeded = [&](const std::string& out, int seed) {
     nlohmann::json config = nlohmann::json::parse(tat_config());
     config["seed"] = seed;
-    const CommandResult run = run_nec("train tat --config " + dir_.write(out + ".json", config.dump()) + " --data " +
-                                      shared("cache") + " --owo " + shared("owo") + " --out " + path(out) +
-                                      " --steps 4 --threads 1");
+    const CommandResult run = train(config, out, "--steps 4");
     EXPECT_EQ(run.exit_code, 0) << run.output;
     return last_line_starting(run.output, "step 4/4");
   };
   auto losses = [](const std::string& line) { return line.substr(line.find("loss")); };
-  const std::string first = train("first", 1), again = train("again", 1), other = train("other", 2);
+  const std::string first = seeded("first", 1), again = seeded("again", 1), other = seeded("other", 2);
   ASSERT_FALSE(first.empty());
   EXPECT_EQ(losses(first), losses(again));
   EXPECT_NE(losses(first), losses(other));
 
-  // With a constant learning rate, a run stopped at step 2 and resumed to 4 takes the steps of "first".
+  // With a constant learning rate, a run stopped at step 2 and resumed to 4 takes the steps of one that never stopped.
   nlohmann::json constant = nlohmann::json::parse(tat_config());
   constant["final_learning_rate"] = constant["learning_rate"];
   constant["warmup_steps"] = 0;
   constant["checkpoint_every"] = 2;
-  const std::string config = dir_.write("constant.json", constant.dump());
-  auto run = [&](const std::string& out, const std::string& extra) {
-    return run_nec("train tat --config " + config + " --data " + shared("cache") + " --owo " + shared("owo") +
-                   " --out " + path(out) + " --threads 1 " + extra);
-  };
+  auto run = [&](const std::string& out, const std::string& extra) { return train(constant, out, extra); };
   const CommandResult straight = run("straight", "--steps 4");
   ASSERT_EQ(straight.exit_code, 0) << straight.output;
   ASSERT_EQ(run("stopped", "--steps 2").exit_code, 0);

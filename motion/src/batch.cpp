@@ -109,6 +109,12 @@ Features crop_features(const DatasetCache& cache, int clip, int begin, int count
   return f;
 }
 
+Features crop_at_start_heading(const DatasetCache& cache, int clip, int begin, int count) {
+  Features crop = crop_features(cache, clip, begin, count);
+  turn_to_heading(crop, root_heading(crop_features(cache, clip, 0, 1), 0));
+  return crop;
+}
+
 BatchLoader::BatchLoader(const DatasetCache& cache, Split split, BatchOptions options)
     : cache_(cache), clips_(cache.clips_in(split)), options_(std::move(options)) {
   if (clips_.empty()) {
@@ -214,9 +220,7 @@ Batch BatchLoader::assemble(const std::vector<int>& order, int epoch, int index)
       count = options_.crop_frames;
       item.crop_start = static_cast<int>(random.below(static_cast<uint64_t>(c.frame_count - count + 1)));
     }
-    item.features = crop_features(cache_, item.clip, item.crop_start, count);
-    // Every crop starts with the heading of its clip's start, where the body faces +Z.
-    turn_to_heading(item.features, root_heading(crop_features(cache_, item.clip, 0, 1), 0));
+    item.features = crop_at_start_heading(cache_, item.clip, item.crop_start, count);
     item.skeleton = stored.skeleton;
     item.canonical_names = stored.canonical_names;
 

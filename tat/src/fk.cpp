@@ -91,8 +91,8 @@ at::Tensor align_window_headings(const at::Tensor& windows) {
       windows.size(2) == 0) {
     throw std::invalid_argument("align_window_headings: windows must be (N > 0, L > 0, J > 0, 9)");
   }
-  const at::Tensor start = root_heading_at(windows.narrow(0, 0, 1), 0);  // (1, 3, 3)
-  return turn_root_orientations(windows, torch::matmul(start, root_heading_at(windows, 0).transpose(-1, -2)));
+  const at::Tensor headings = root_heading_at(windows, 0);  // (N, 3, 3)
+  return turn_root_orientations(windows, torch::matmul(headings.narrow(0, 0, 1), headings.transpose(-1, -2)));
 }
 
 at::Tensor continue_window_headings(const at::Tensor& windows, const std::vector<int64_t>& starts) {

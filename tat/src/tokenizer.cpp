@@ -190,7 +190,6 @@ class NecEncoderImpl : public detail::EncoderImpl {
 
   at::Tensor forward(const at::Tensor& features, const at::Tensor& joint_mask,
                      const at::Tensor& joint_embeddings) override {
-    const int64_t b = features.size(0), t = features.size(1);
     const at::Tensor joints = input_->forward(features) + embedding_(joint_embeddings).unsqueeze(1);  // (B, T, J, D)
     // The virtual joint starts as the learnt vector plus the root's own input
     // (joint 0 of every skeleton): the root trajectory, a few channels among

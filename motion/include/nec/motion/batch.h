@@ -73,6 +73,9 @@ struct Batch {
 // with frame 0's root displacement replaced by (0, root height, 0) as
 // encode_features writes it. (count, J, 9)
 Features crop_features(const DatasetCache& cache, int clip, int begin, int count);
+// crop_features turned to the heading of its clip's frame 0 (turn_to_heading),
+// where preprocessing made the body face +Z: a training crop as batches hold it.
+Features crop_at_start_heading(const DatasetCache& cache, int clip, int begin, int count);
 
 class BatchLoader {
  public:

@@ -10,8 +10,8 @@
 //   at::Tensor back = model->decode(q.quantized, joint_mask, target_embeddings);  // any skeleton
 //
 // NecRvq / NecVq: per joint MLP(Θ_{t,j}) + Proj(h_j); a virtual joint
-// appended at every step, a learnt vector plus the root joint's input; `blocks` spatio-temporal blocks, each a temporal
-// conv (stride 2) + ResNet1D per joint, then spatial self-attention over the
+// appended at every step, a learnt vector plus the root joint's input;
+// `blocks` spatio-temporal blocks, each a temporal conv (stride 2) + ResNet1D per joint, then spatial self-attention over the
 // joints and the virtual joint (padded joints masked); only the virtual joint
 // goes to the quantizer (T / r steps, r = 2^blocks). Decoder: [z_t ‖ h_j] per
 // joint (and z_t as the virtual joint) -> spatial attention -> temporal
