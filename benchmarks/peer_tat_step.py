@@ -341,6 +341,16 @@ def scale_root_displacement(features, factor):
     return scaled
 
 
+def turn_root_displacement(features, inverse):
+    """fk.cpp displacement_to_body_frame / displacement_from_body_frame: Δ turned by the frame-0 root heading."""
+    turn = heading_matrix(rot6d_to_matrix(features[:, 0, 0, 3:9]))  # (B, 3, 3)
+    if inverse:
+        turn = turn.transpose(-1, -2)
+    out = features.clone()
+    out[:, :, 0, 0:3] = torch.matmul(features[:, :, 0, 0:3], turn.transpose(-1, -2))
+    return out
+
+
 class Tokenizer(nn.Module):
     def __init__(self, c):
         super().__init__()
@@ -351,14 +361,16 @@ class Tokenizer(nn.Module):
 
     def forward(self, features, joint_mask, frame_mask, joint_embeddings):
         joint_mask = joint_mask.to(torch.bool)
-        latent = self.encoder(scale_root_displacement(features, ROOT_DISPLACEMENT_SCALE), joint_mask,
+        body_frame = turn_root_displacement(features, inverse=False)
+        latent = self.encoder(scale_root_displacement(body_frame, ROOT_DISPLACEMENT_SCALE), joint_mask,
                               joint_embeddings)  # (B, S, C)
         b, s, code_dim = latent.shape
         step_mask = frame_mask.to(torch.bool).reshape(b, s, self.downsampling).any(-1)
         quantized, codes, commitment, perplexity = self.quantizer(latent.reshape(b * s, code_dim),
                                                                   step_mask.reshape(b * s))
-        reconstruction = scale_root_displacement(self.decoder(quantized.view(b, s, code_dim), joint_mask,
-                                                              joint_embeddings), 1.0 / ROOT_DISPLACEMENT_SCALE)
+        reconstruction = turn_root_displacement(scale_root_displacement(
+            self.decoder(quantized.view(b, s, code_dim), joint_mask, joint_embeddings),
+            1.0 / ROOT_DISPLACEMENT_SCALE), inverse=True)
         return reconstruction, codes.view(b, s, -1), commitment, perplexity
 
 

@@ -2,6 +2,8 @@
 // zero-padding RVQ-VAE baseline, sharing the temporal blocks and the quantizer.
 #include "nec/tat/tokenizer.h"
 
+#include "nec/tat/fk.h"
+
 #include <torch/torch.h>
 
 #include <cmath>
@@ -430,8 +432,8 @@ at::Tensor TokenizerImpl::encode(const at::Tensor& features, const at::Tensor& j
                                                   " joints, more than this zero-pad-rvq model's max_joints = " +
                                                   std::to_string(config_.max_joints));
   }
-  return encoder_->forward(scale_root_displacement(features, kRootDisplacementScale), joint_mask.to(torch::kBool),
-                           joint_embeddings);
+  return encoder_->forward(scale_root_displacement(displacement_to_body_frame(features), kRootDisplacementScale),
+                           joint_mask.to(torch::kBool), joint_embeddings);
 }
 
 QuantizerOutput TokenizerImpl::quantize(const at::Tensor& latent, const at::Tensor& step_mask) {
@@ -469,8 +471,8 @@ at::Tensor TokenizerImpl::decode(const at::Tensor& quantized, const at::Tensor& 
                                                   " joints, more than this zero-pad-rvq model's max_joints = " +
                                                   std::to_string(config_.max_joints));
   }
-  return scale_root_displacement(decoder_->forward(quantized, joint_mask.to(torch::kBool), joint_embeddings),
-                                 1.0 / kRootDisplacementScale);
+  return displacement_from_body_frame(scale_root_displacement(
+      decoder_->forward(quantized, joint_mask.to(torch::kBool), joint_embeddings), 1.0 / kRootDisplacementScale));
 }
 
 at::Tensor TokenizerImpl::codes_to_latent(const at::Tensor& codes) {

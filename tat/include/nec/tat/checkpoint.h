@@ -29,10 +29,11 @@ class Optimizer;
 namespace nec::tat {
 
 constexpr const char* kTatCheckpointFormat = "nec-tat";
-constexpr int kTatCheckpointVersion = 5;  // 2: the encoder scales the root displacement up; 3: the decoder
+constexpr int kTatCheckpointVersion = 6;  // 2: the encoder scales the root displacement up; 3: the decoder
                                            // predicts it scaled; 4: windows start with the clip's start
                                            // heading (turn_to_heading, align_window_headings); 5: the
-                                           // virtual joint starts from the root joint's input
+                                           // virtual joint starts from the root joint's input; 6: the root
+                                           // displacement in the body's heading frame
 
 struct TatCheckpointInfo {
   int64_t window_frames = 64;   // training window T, e.g. 64; inference uses windows of this size

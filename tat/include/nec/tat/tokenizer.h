@@ -22,6 +22,11 @@
 // file); the same temporal conv stack, the same quantizer and token budget;
 // ignores joint embeddings.
 //
+// Both kinds read and predict the root displacement in the body's heading
+// frame (displacement_to_body_frame, fk.h): encode turns it there, decode
+// turns it back with the heading of the root it predicted at frame 0, so
+// their features in and out follow Θ's convention.
+//
 // Details shared by the kinds: temporal blocks are Conv1d(k4, s2, p1) or
 // nearest x2 + Conv1d(k3), each followed by one ResNet1D unit (ReLU, dilated
 // k3 conv, ReLU, 1x1 conv, residual); attention layers are pre-norm with a
