@@ -40,7 +40,8 @@ FEED_FORWARD_MULT = 2    # tokenizer.cpp kFeedForwardMult
 MASKED_SCORE = -1e9      # tokenizer.cpp kMaskedScore
 LAPLACE_EPSILON = 1e-5   # quantizer.cpp kLaplaceEpsilon
 TINY_SQUARED_NORM = 1e-20  # fk.cpp kTinySquaredNorm
-ROOT_DISPLACEMENT_SCALE = 20.0  # tokenizer.h kRootDisplacementScale
+ROOT_MOTION_SCALE = 20.0  # model_space.h kRootMotionScale
+MODEL_CHANNELS = 10       # model_space.h kModelChannels
 
 
 # ---- Configuration (defaults of tat/include/nec/tat/{training,tokenizer,quantizer,loss}.h) ----
@@ -95,8 +96,8 @@ def learning_rate_at(c, step):
 # ---- Tokenizer (tokenizer.cpp) ----
 
 def rest_pose_features():
-    """(9): zero displacement, identity rot6D."""
-    rest = torch.zeros(9)
+    """(MODEL_CHANNELS): zero root motion, identity rot6D."""
+    rest = torch.zeros(MODEL_CHANNELS)
     rest[3] = 1.0
     rest[7] = 1.0
     return rest
@@ -185,7 +186,7 @@ class NecEncoder(nn.Module):
     def __init__(self, c):
         super().__init__()
         d = c["dim"]
-        self.input = nn.Sequential(nn.Linear(9, d), nn.ReLU(), nn.Linear(d, d))  # built in this order, as tokenizer.cpp
+        self.input = nn.Sequential(nn.Linear(MODEL_CHANNELS, d), nn.ReLU(), nn.Linear(d, d))  # built in this order, as tokenizer.cpp
         self.embedding = nn.Linear(c["joint_embedding_dim"], d)
         self.virtual_joint = nn.Parameter(torch.randn(d) * 0.02)
         self.temporal = nn.ModuleList()
@@ -199,7 +200,7 @@ class NecEncoder(nn.Module):
         self.to_latent = nn.Linear(d, c["code_dim"])
 
     def forward(self, features, joint_mask, joint_embeddings):
-        """(B, T, J, 9) -> latent (B, T / r, C)."""
+        """Model space (B, T, J, MODEL_CHANNELS) -> latent (B, T / r, C)."""
         b, t = features.shape[:2]
         joints = self.input(features) + self.embedding(joint_embeddings).unsqueeze(1)
         # The virtual joint starts as the learnt vector plus the root joint's input.
@@ -230,10 +231,10 @@ class NecDecoder(nn.Module):
                 self.spatial.append(SpatialAttention(d, c["heads"]))
             self.temporal.append(UpBlock(d))
         self.attention_layers = c["attention_layers"]
-        self.output = nn.Linear(d, 9)
+        self.output = nn.Linear(d, MODEL_CHANNELS)
 
     def forward(self, quantized, joint_mask, joint_embeddings):
-        """(B, S, C) -> (B, S r, J, 9), zero at padded joints."""
+        """(B, S, C) -> model space (B, S r, J, MODEL_CHANNELS), zero at padded joints."""
         joints = joint_mask.size(1)
         virtual_joint = self.virtual_from_latent(quantized).unsqueeze(2)
         joint_features = self.joint_hidden(torch.relu(
@@ -333,22 +334,47 @@ class ResidualQuantizer(nn.Module):
         return latent + (quantized - latent).detach(), codes, commitment, perplexity
 
 
-def scale_root_displacement(features, factor):
-    """A copy of features (..., J, 9) with the root's x and z displacement times factor."""
-    scaled = features.clone()
-    scaled[..., 0, 0] *= factor
-    scaled[..., 0, 2] *= factor
-    return scaled
+# ---- Model space (model_space.cpp) ----
+
+def yaw_matrix(angle):
+    c, s = torch.cos(angle), torch.sin(angle)
+    zero, one = torch.zeros_like(angle), torch.ones_like(angle)
+    return torch.stack([c, zero, s, zero, one, zero, -s, zero, c], -1).view(*angle.shape, 3, 3)
 
 
-def turn_root_displacement(features, inverse):
-    """fk.cpp displacement_to_body_frame / displacement_from_body_frame: Δ turned by the frame-0 root heading."""
-    turn = heading_matrix(rot6d_to_matrix(features[:, 0, 0, 3:9]))  # (B, 3, 3)
-    if inverse:
-        turn = turn.transpose(-1, -2)
-    out = features.clone()
-    out[:, :, 0, 0:3] = torch.matmul(features[:, :, 0, 0:3], turn.transpose(-1, -2))
-    return out
+def turned_displacement(root, turn, scale):
+    delta = torch.matmul(root.narrow(-1, 0, 3), turn.transpose(-1, -2))
+    return delta * torch.tensor([scale, 1.0, scale], dtype=root.dtype)
+
+
+def features_to_model_space(features):
+    """(B, T, J, 9) -> (B, T, J, MODEL_CHANNELS): body-frame Δ, untwisted root orientation, yaw rate."""
+    root = features.select(2, 0)
+    rotation = rot6d_to_matrix(root.narrow(-1, 3, 6))
+    heading = heading_matrix(rotation)
+    start = heading.select(1, 0)
+    untwisted = torch.matmul(start.unsqueeze(1), torch.matmul(heading.transpose(-1, -2), rotation))
+    rate = torch.zeros_like(root.select(-1, 0))
+    if features.size(1) > 1:
+        step = torch.matmul(heading[:, :-1].transpose(-1, -2), heading[:, 1:])
+        rate = torch.cat([rate.narrow(1, 0, 1), torch.atan2(step[..., 0, 2], step[..., 0, 0])], 1)
+    model_root = torch.cat([turned_displacement(root, start, ROOT_MOTION_SCALE), matrix_to_rot6d(untwisted),
+                            (rate * ROOT_MOTION_SCALE).unsqueeze(-1)], -1)
+    others = nn.functional.pad(features.narrow(2, 1, features.size(2) - 1), (0, 1))
+    return torch.cat([model_root.unsqueeze(2), others], 2)
+
+
+def model_space_to_features(model):
+    """The inverse: (B, T, J, MODEL_CHANNELS) -> Θ (B, T, J, 9)."""
+    root = model.select(2, 0)
+    untwisted = rot6d_to_matrix(root.narrow(-1, 3, 6))
+    rate = root.select(-1, 9) / ROOT_MOTION_SCALE
+    rate = torch.cat([torch.zeros_like(rate.narrow(1, 0, 1)), rate.narrow(1, 1, rate.size(1) - 1)], 1)
+    rotation = torch.matmul(yaw_matrix(rate.cumsum(1)), untwisted)
+    start = heading_matrix(untwisted.select(1, 0))
+    feature_root = torch.cat([turned_displacement(root, start.transpose(-1, -2), 1.0 / ROOT_MOTION_SCALE),
+                              matrix_to_rot6d(rotation)], -1)
+    return torch.cat([feature_root.unsqueeze(2), model.narrow(2, 1, model.size(2) - 1).narrow(-1, 0, 9)], 2)
 
 
 class Tokenizer(nn.Module):
@@ -361,16 +387,13 @@ class Tokenizer(nn.Module):
 
     def forward(self, features, joint_mask, frame_mask, joint_embeddings):
         joint_mask = joint_mask.to(torch.bool)
-        body_frame = turn_root_displacement(features, inverse=False)
-        latent = self.encoder(scale_root_displacement(body_frame, ROOT_DISPLACEMENT_SCALE), joint_mask,
-                              joint_embeddings)  # (B, S, C)
+        latent = self.encoder(features_to_model_space(features), joint_mask, joint_embeddings)  # (B, S, C)
         b, s, code_dim = latent.shape
         step_mask = frame_mask.to(torch.bool).reshape(b, s, self.downsampling).any(-1)
         quantized, codes, commitment, perplexity = self.quantizer(latent.reshape(b * s, code_dim),
                                                                   step_mask.reshape(b * s))
-        reconstruction = turn_root_displacement(scale_root_displacement(
-            self.decoder(quantized.view(b, s, code_dim), joint_mask, joint_embeddings),
-            1.0 / ROOT_DISPLACEMENT_SCALE), inverse=True)
+        reconstruction = model_space_to_features(self.decoder(quantized.view(b, s, code_dim), joint_mask,
+                                                              joint_embeddings))
         return reconstruction, codes.view(b, s, -1), commitment, perplexity
 
 
@@ -447,9 +470,8 @@ def reconstruction_loss(prediction, x, commitment, w):
     real = frame.view(b, t, 1) * x["joint_mask"].to(prediction.dtype).view(b, 1, j)
     target = x["features"]
     rotation = masked_l1(prediction.narrow(-1, 3, 6), target.narrow(-1, 3, 6), real)
-    scaled_root = [scale_root_displacement(f[:, :, :1], ROOT_DISPLACEMENT_SCALE).select(2, 0).narrow(-1, 0, 3)
-                   for f in (prediction, target)]
-    root = masked_l1(scaled_root[0], scaled_root[1], frame)
+    root_motion = [features_to_model_space(f[:, :, :1]).select(2, 0)[..., [0, 1, 2, 9]] for f in (prediction, target)]
+    root = masked_l1(root_motion[0], root_motion[1], frame)
     predicted = features_to_positions(prediction, x["parents"], x["offsets"])
     with torch.no_grad():
         expected = features_to_positions(target, x["parents"], x["offsets"])

@@ -268,41 +268,6 @@ TEST(TatFk, WindowsAlignedToTheStartHeadingAndContinuedGiveTheClipBack) {
   }
 }
 
-// The same walk on two rigs whose roots face different ways (rig B's root is
-// turned 90° about +Y against rig A's, as the MANN dog's against a human's):
-// Θ holds different root displacements, the body frame the same ones.
-TEST(TatFk, DisplacementInTheBodyFrameIsTheSameWhereverTheRootFaces) {
-  std::mt19937 rng(5);
-  const Skeleton s = testing::random_skeleton(rng, 4);
-  Motion a = testing::random_motion(rng, s, 12);
-  Motion b = a;
-  const double offset = M_PI / 2.0;
-  Vec3 position(0.3, 1.0, -0.2);
-  for (int t = 0; t < 12; ++t) {
-    const double body_heading = 0.15 * t;  // starts facing +Z, turns left while walking forward
-    position += Eigen::AngleAxisd(body_heading, Vec3::UnitY()) * Vec3(0.0, 0.01 * std::sin(t), 0.05);
-    a.rotation(t, 0) = Quat(Eigen::AngleAxisd(body_heading, Vec3::UnitY()));
-    b.rotation(t, 0) = Quat(Eigen::AngleAxisd(body_heading + offset, Vec3::UnitY()));
-    a.translation(t, 0) = b.translation(t, 0) = position;
-  }
-  auto tensor = [&](const Motion& m) {
-    Features f = encode_features(s, m);
-    return torch::from_blob(f.data.data(), {1, 12, 4, 9}, torch::kFloat32).clone();
-  };
-  const at::Tensor on_a = tensor(a), on_b = tensor(b);
-  const auto delta = [](const at::Tensor& f) { return f.select(2, 0).narrow(-1, 0, 3); };
-  ASSERT_GT((delta(on_a) - delta(on_b)).abs().max().item<double>(), 0.04) << "the rigs should differ in Θ";
-
-  const at::Tensor body_a = tat::displacement_to_body_frame(on_a), body_b = tat::displacement_to_body_frame(on_b);
-  EXPECT_TRUE(torch::allclose(delta(body_a), delta(on_a), 1e-6, 1e-6)) << "rig A's root faces its body";
-  EXPECT_TRUE(torch::allclose(delta(body_b), delta(on_a), 1e-5, 1e-5))
-      << "max difference " << (delta(body_b) - delta(on_a)).abs().max().item<double>();
-  EXPECT_TRUE(torch::equal(body_b.narrow(-1, 3, 6), on_b.narrow(-1, 3, 6))) << "only Δ turns";
-  EXPECT_TRUE(torch::equal(body_b.narrow(2, 1, 3), on_b.narrow(2, 1, 3)));
-  EXPECT_TRUE(torch::allclose(tat::displacement_from_body_frame(body_b), on_b, 1e-5, 1e-5));
-  EXPECT_THROW(tat::displacement_to_body_frame(torch::zeros({1, 0, 4, 9})), std::invalid_argument);
-}
-
 TEST(TatFk, RejectsBadShapes) {
   EXPECT_THROW(tat::features_to_positions(torch::zeros({1, 2, 3, 8}), torch::zeros({1, 3}, torch::kLong),
                                           torch::zeros({1, 3, 3})),

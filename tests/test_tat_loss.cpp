@@ -1,13 +1,15 @@
 // Tokenizer reconstruction loss: zero at the target, each term on its own channels, masks.
 #include "nec/motion/features.h"
+#include "nec/tat/fk.h"
 #include "nec/tat/loss.h"
-#include "nec/tat/tokenizer.h"
+#include "nec/tat/model_space.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
 #include <torch/torch.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -142,8 +144,28 @@ TEST(TatLoss, EachTermRespondsToItsOwnChannels) {
   EXPECT_GT(l.root, 0.0);
   EXPECT_GT(l.position, 0.0);
   EXPECT_GT(l.velocity, 0.0);
-  // 0.2 on each of 3 channels at one of 12 + 9 real frames; x and z count at the networks' scale.
-  EXPECT_NEAR(l.root, (0.2 * (2.0 * tat::kRootDisplacementScale + 1.0) / 3.0) / 21.0, 1e-6);
+  // The root term averages 4 channels (Δ' x, y, z and the yaw rate) over 12 + 9 real frames. Δy alone:
+  p = f.batch.features.clone();
+  p[0][frame][0][1].add_(0.2);
+  EXPECT_NEAR(loss_of(p, f.batch).root, 0.2 / 4.0 / 21.0, 1e-6);
+  // Horizontal Δ counts at the networks' scale, turned into the body's frame (its length kept).
+  p = f.batch.features.clone();
+  p[0][frame][0][0].add_(0.2);
+  const double horizontal = loss_of(p, f.batch).root * 4.0 * 21.0 / tat::kRootMotionScale;  // |Δx'| + |Δz'|
+  EXPECT_GE(horizontal, 0.2 - 1e-5);
+  EXPECT_LE(horizontal, 0.2 * std::sqrt(2.0) + 1e-5);
+
+  // Turning the root about +Y at one frame (not frame 0): the yaw rate into it and out of it, at the
+  // networks' scale; rotations and positions too.
+  p = f.batch.features.clone();
+  const at::Tensor turn = torch::tensor({std::cos(0.1), 0.0, std::sin(0.1), 0.0, 1.0, 0.0, -std::sin(0.1), 0.0,
+                                         std::cos(0.1)}).view({3, 3}).to(torch::kFloat32);
+  p[0][frame][0].narrow(0, 3, 6).copy_(
+      tat::matrix_to_rot6d(torch::matmul(turn, tat::rot6d_to_matrix(p[0][frame][0].narrow(0, 3, 6)))));
+  l = loss_of(p, f.batch);
+  EXPECT_NEAR(l.root, 2.0 * 0.1 * tat::kRootMotionScale / 4.0 / 21.0, 1e-5);
+  EXPECT_GT(l.rotation, 0.0);
+  EXPECT_GT(l.position, 0.0);
 
   // Translation channels of a non-root joint are not part of Θ: nothing.
   p = f.batch.features.clone();

@@ -115,32 +115,6 @@ at::Tensor continue_window_headings(const at::Tensor& windows, const std::vector
   return torch::cat(turned);
 }
 
-namespace {
-
-// A copy of features (B, T, J, 9) with every frame's Δ premultiplied by turn (B, 3, 3).
-at::Tensor turn_root_displacement(const at::Tensor& features, const at::Tensor& turn) {
-  at::Tensor out = features.clone();
-  const at::Tensor delta = features.select(2, 0).narrow(-1, 0, 3);  // (B, T, 3) as rows
-  out.select(2, 0).narrow(-1, 0, 3).copy_(torch::matmul(delta, turn.transpose(-1, -2)));
-  return out;
-}
-
-at::Tensor start_root_heading(const at::Tensor& features) {
-  check_shape(features.dim() == 4 && features.size(1) > 0 && features.size(2) > 0 && features.size(3) == 9,
-              "features must be (B, T > 0, J > 0, 9)");
-  return heading_matrix(rot6d_to_matrix(features.select(1, 0).select(1, 0).narrow(-1, 3, 6)));  // (B, 3, 3)
-}
-
-}  // namespace
-
-at::Tensor displacement_to_body_frame(const at::Tensor& features) {
-  return turn_root_displacement(features, start_root_heading(features));
-}
-
-at::Tensor displacement_from_body_frame(const at::Tensor& features) {
-  return turn_root_displacement(features, start_root_heading(features).transpose(-1, -2));
-}
-
 FkResult features_to_positions(const at::Tensor& features, const at::Tensor& parents, const at::Tensor& offsets) {
   check_shape(features.dim() == 4 && features.size(3) == 9, "features must be (B, T, J, 9)");
   const int64_t batch = features.size(0), frames = features.size(1), joints = features.size(2);

@@ -3,7 +3,7 @@
 #include "nec/tat/loss.h"
 
 #include "nec/tat/fk.h"
-#include "nec/tat/tokenizer.h"
+#include "nec/tat/model_space.h"
 
 #include <torch/torch.h>
 
@@ -47,11 +47,12 @@ ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const Batch
 
   const at::Tensor rotation =
       masked_l1(prediction.narrow(-1, 3, 6), target.features.narrow(-1, 3, 6), real);
-  // At the scale the networks predict it (see kRootDisplacementScale).
-  const at::Tensor root = masked_l1(
-      scale_root_displacement(prediction.narrow(2, 0, 1), kRootDisplacementScale).select(2, 0).narrow(-1, 0, 3),
-      scale_root_displacement(target.features.narrow(2, 0, 1), kRootDisplacementScale).select(2, 0).narrow(-1, 0, 3),
-      frame);
+  // The root's motion as the networks predict it (model space: body-frame Δ and yaw rate, scaled).
+  const auto root_motion = [](const at::Tensor& features) {
+    const at::Tensor root = features_to_model_space(features.narrow(2, 0, 1)).select(2, 0);  // (B, T, 10)
+    return torch::cat({root.narrow(-1, 0, 3), root.narrow(-1, 9, 1)}, -1);
+  };
+  const at::Tensor root = masked_l1(root_motion(prediction), root_motion(target.features), frame);
 
   const at::Tensor predicted_positions = features_to_positions(prediction, target.parents, target.offsets).positions;
   at::Tensor target_positions;

@@ -2,7 +2,7 @@
 // zero-padding RVQ-VAE baseline, sharing the temporal blocks and the quantizer.
 #include "nec/tat/tokenizer.h"
 
-#include "nec/tat/fk.h"
+#include "nec/tat/model_space.h"
 
 #include <torch/torch.h>
 
@@ -31,9 +31,10 @@ torch::nn::Conv1d conv1d(int64_t in, int64_t out, int64_t kernel, int64_t stride
 }
 
 
-// The rot6D of the identity, the rest pose the decoders predict offsets from: (9).
+// The model-space row of a joint at rest (identity rot6D), which the decoders
+// predict offsets from: (kModelChannels).
 at::Tensor rest_pose_features(const at::TensorOptions& options) {
-  at::Tensor rest = torch::zeros({9}, options);
+  at::Tensor rest = torch::zeros({kModelChannels}, options);
   rest.narrow(0, 3, 1).fill_(1.0);
   rest.narrow(0, 7, 1).fill_(1.0);
   return rest;
@@ -147,14 +148,14 @@ namespace detail {
 // One half of a tokenizer. joint_mask (B, J) bool; joint_embeddings (B, J, E) or undefined.
 class EncoderImpl : public torch::nn::Module {
  public:
-  // features (B, T, J, 9) -> latent (B, T / r, C)
+  // model-space features (B, T, J, kModelChannels) -> latent (B, T / r, C)
   virtual at::Tensor forward(const at::Tensor& features, const at::Tensor& joint_mask,
                              const at::Tensor& joint_embeddings) = 0;
 };
 
 class DecoderImpl : public torch::nn::Module {
  public:
-  // quantized (B, S, C) -> features (B, S * r, J, 9), zero at padded joints
+  // quantized (B, S, C) -> model-space features (B, S * r, J, kModelChannels), zero at padded joints
   virtual at::Tensor forward(const at::Tensor& quantized, const at::Tensor& joint_mask,
                              const at::Tensor& joint_embeddings) = 0;
 };
@@ -171,7 +172,7 @@ class NecEncoderImpl : public detail::EncoderImpl {
     const int64_t d = config.dim;
     // Layers built in order (argument evaluation order is unspecified, and it
     // decides the random initial weights).
-    torch::nn::Linear first(9, d);
+    torch::nn::Linear first(kModelChannels, d);
     torch::nn::Linear second(d, d);
     input_ = register_module("input", torch::nn::Sequential(first, torch::nn::ReLU(), second));
     embedding_ = register_module("embedding", torch::nn::Linear(config.joint_embedding_dim, d));
@@ -242,7 +243,7 @@ class NecDecoderImpl : public detail::DecoderImpl {
       temporal_->push_back(UpBlock(d));
     }
     attention_layers_ = config.attention_layers;
-    output_ = register_module("output", torch::nn::Linear(d, 9));
+    output_ = register_module("output", torch::nn::Linear(d, kModelChannels));
   }
 
   at::Tensor forward(const at::Tensor& quantized, const at::Tensor& joint_mask,
@@ -262,7 +263,7 @@ class NecDecoderImpl : public detail::DecoderImpl {
       if (block + 1 == blocks) tokens = tokens.narrow(2, 1, joints);
       tokens = per_token(temporal_->ptr<UpBlockImpl>(block), tokens);
     }
-    const at::Tensor out = output_(tokens) + rest_pose_features(tokens.options());  // (B, T, J, 9)
+    const at::Tensor out = output_(tokens) + rest_pose_features(tokens.options());  // (B, T, J, kModelChannels)
     return out * joint_mask.view({joint_mask.size(0), 1, joints, 1}).to(out.scalar_type());
   }
 
@@ -273,13 +274,13 @@ class NecDecoderImpl : public detail::DecoderImpl {
   torch::nn::ModuleList spatial_{nullptr}, temporal_{nullptr};
 };
 
-// Zero-padding baseline encoder: (B, T, J, 9) -> channels (B, 9 max_joints, T),
+// Zero-padding baseline encoder: (B, T, J, kModelChannels) -> channels (B, kModelChannels max_joints, T),
 // conv 3, the same temporal blocks, conv 3 to the latent width.
 class PaddedEncoderImpl : public detail::EncoderImpl {
  public:
   explicit PaddedEncoderImpl(const TatConfig& config) : max_joints_(config.max_joints) {
     const int64_t d = config.dim;
-    input_ = register_module("input", conv1d(9 * max_joints_, d, 3, 1, 1));
+    input_ = register_module("input", conv1d(kModelChannels * max_joints_, d, 3, 1, 1));
     temporal_ = register_module("temporal", torch::nn::ModuleList());
     for (int64_t block = 0; block < config.blocks; ++block) temporal_->push_back(DownBlock(d));
     to_latent_ = register_module("to_latent", conv1d(d, config.quantizer.code_dim, 3, 1, 1));
@@ -288,8 +289,8 @@ class PaddedEncoderImpl : public detail::EncoderImpl {
   at::Tensor forward(const at::Tensor& features, const at::Tensor& joint_mask, const at::Tensor&) override {
     const int64_t b = features.size(0), t = features.size(1), joints = features.size(2);
     const at::Tensor real = features * joint_mask.view({b, 1, joints, 1}).to(features.scalar_type());
-    const at::Tensor padded = torch::constant_pad_nd(real, {0, 0, 0, max_joints_ - joints});  // (B, T, Jmax, 9)
-    at::Tensor x = torch::relu(input_(padded.view({b, t, 9 * max_joints_}).transpose(1, 2)));
+    const at::Tensor padded = torch::constant_pad_nd(real, {0, 0, 0, max_joints_ - joints});  // (B, T, Jmax, kModelChannels)
+    at::Tensor x = torch::relu(input_(padded.view({b, t, kModelChannels * max_joints_}).transpose(1, 2)));
     for (size_t block = 0; block < temporal_->size(); ++block) x = temporal_->ptr<DownBlockImpl>(block)->forward(x);
     return to_latent_(x).transpose(1, 2).contiguous();  // (B, T / r, C)
   }
@@ -308,7 +309,7 @@ class PaddedDecoderImpl : public detail::DecoderImpl {
     from_latent_ = register_module("from_latent", conv1d(config.quantizer.code_dim, d, 3, 1, 1));
     temporal_ = register_module("temporal", torch::nn::ModuleList());
     for (int64_t block = 0; block < config.blocks; ++block) temporal_->push_back(UpBlock(d));
-    output_ = register_module("output", conv1d(d, 9 * max_joints_, 3, 1, 1));
+    output_ = register_module("output", conv1d(d, kModelChannels * max_joints_, 3, 1, 1));
   }
 
   at::Tensor forward(const at::Tensor& quantized, const at::Tensor& joint_mask, const at::Tensor&) override {
@@ -318,7 +319,7 @@ class PaddedDecoderImpl : public detail::DecoderImpl {
     const at::Tensor channels = output_(x).transpose(1, 2);  // (B, T, 9 Jmax)
     const int64_t t = channels.size(1);
     const at::Tensor out =
-        channels.reshape({b, t, max_joints_, 9}).narrow(2, 0, joints) + rest_pose_features(channels.options());
+        channels.reshape({b, t, max_joints_, kModelChannels}).narrow(2, 0, joints) + rest_pose_features(channels.options());
     return out * joint_mask.view({b, 1, joints, 1}).to(out.scalar_type());
   }
 
@@ -340,14 +341,6 @@ std::string shape_of(const at::Tensor& x) {
 }
 
 }  // namespace
-
-at::Tensor scale_root_displacement(const at::Tensor& features, double factor) {
-  at::Tensor scaled = features.clone();
-  at::Tensor root = scaled.select(-2, 0);  // (..., 9) view
-  root.select(-1, 0).mul_(factor);
-  root.select(-1, 2).mul_(factor);
-  return scaled;
-}
 
 std::string to_string(TokenizerKind kind) {
   switch (kind) {
@@ -432,8 +425,7 @@ at::Tensor TokenizerImpl::encode(const at::Tensor& features, const at::Tensor& j
                                                   " joints, more than this zero-pad-rvq model's max_joints = " +
                                                   std::to_string(config_.max_joints));
   }
-  return encoder_->forward(scale_root_displacement(displacement_to_body_frame(features), kRootDisplacementScale),
-                           joint_mask.to(torch::kBool), joint_embeddings);
+  return encoder_->forward(features_to_model_space(features), joint_mask.to(torch::kBool), joint_embeddings);
 }
 
 QuantizerOutput TokenizerImpl::quantize(const at::Tensor& latent, const at::Tensor& step_mask) {
@@ -471,8 +463,7 @@ at::Tensor TokenizerImpl::decode(const at::Tensor& quantized, const at::Tensor& 
                                                   " joints, more than this zero-pad-rvq model's max_joints = " +
                                                   std::to_string(config_.max_joints));
   }
-  return displacement_from_body_frame(scale_root_displacement(
-      decoder_->forward(quantized, joint_mask.to(torch::kBool), joint_embeddings), 1.0 / kRootDisplacementScale));
+  return model_space_to_features(decoder_->forward(quantized, joint_mask.to(torch::kBool), joint_embeddings));
 }
 
 at::Tensor TokenizerImpl::codes_to_latent(const at::Tensor& codes) {

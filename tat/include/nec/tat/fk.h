@@ -41,18 +41,6 @@ at::Tensor align_window_headings(const at::Tensor& windows);
 // start heading so continue one another's turning. A copy.
 at::Tensor continue_window_headings(const at::Tensor& windows, const std::vector<int64_t>& starts);
 
-// The root displacement Δ in Θ is in the heading frame of the root joint,
-// which on some rigs faces away from the body (the MANN dog's root faces 90°
-// to the side). Every window starts with its clip's start heading, where
-// preprocessing made the body face +Z, so the root's heading at a window's
-// frame 0 is the rig's own offset from the body. The tokenizer reads and
-// predicts Δ in the body's heading frame: Δ turned about +Y by the window's
-// frame-0 root heading, so "forward" is the same on every rig.
-// features (B, T ≥ 1, J, 9) -> a copy with Δ (root features 0..2) turned by
-// the heading of the root at frame 0 of each item, and back (the exact inverse).
-at::Tensor displacement_to_body_frame(const at::Tensor& features);
-at::Tensor displacement_from_body_frame(const at::Tensor& features);
-
 struct FkResult {
   at::Tensor positions;         // (B, T, J, 3) world positions
   at::Tensor global_rotations;  // (B, T, J, 3, 3)

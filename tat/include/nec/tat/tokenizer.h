@@ -22,10 +22,10 @@
 // file); the same temporal conv stack, the same quantizer and token budget;
 // ignores joint embeddings.
 //
-// Both kinds read and predict the root displacement in the body's heading
-// frame (displacement_to_body_frame, fk.h): encode turns it there, decode
-// turns it back with the heading of the root it predicted at frame 0, so
-// their features in and out follow Θ's convention.
+// Both kinds read and predict Θ in model space (model_space.h: the root
+// displacement in the body's heading frame, turning as a yaw rate, both
+// scaled up); encode converts Θ there, decode converts back, so their
+// features in and out are Θ.
 //
 // Details shared by the kinds: temporal blocks are Conv1d(k4, s2, p1) or
 // nearest x2 + Conv1d(k3), each followed by one ResNet1D unit (ReLU, dilated
@@ -48,15 +48,6 @@
 namespace nec::tat {
 
 enum class TokenizerKind { NecRvq, NecVq, ZeroPadRvq };
-// The root's horizontal displacement per frame (features 0 and 2 of joint 0,
-// ~0.04 body sizes a frame when walking) is far smaller than every other
-// feature: the networks read and predict it times kRootDisplacementScale, and
-// the reconstruction loss compares it at that scale, so that it is learnt as
-// precisely as the rotations.
-constexpr double kRootDisplacementScale = 20.0;
-// A copy of features (..., J, 9) with the root's x and z displacement times `factor`.
-at::Tensor scale_root_displacement(const at::Tensor& features, double factor);
-
 std::string to_string(TokenizerKind kind);             // "nec-rvq", "nec-vq", "zero-pad-rvq"
 TokenizerKind tokenizer_kind_from_string(const std::string& name);  // throws std::invalid_argument
 

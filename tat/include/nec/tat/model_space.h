@@ -1,0 +1,42 @@
+// The tokenizer's view of Θ ("model space"): what its networks read and
+// predict, converted exactly to and from Θ at its boundary.
+//
+//   at::Tensor m = features_to_model_space(x.features);  // (B, T, J, 9) -> (B, T, J, kModelChannels)
+//   at::Tensor back = model_space_to_features(m);        // Θ again (float rounding)
+//
+// Θ keeps the root's absolute orientation per frame and its displacement Δ in
+// the heading frame of the root joint. Both hide what transfers across rigs:
+//  - turning: a 60° turn over a 64-frame window changes 2 of J × 9 numbers; the
+//    networks learnt to ignore it (a tokenizer trained on Θ gave back the same
+//    root heading for an input turned by 60°);
+//  - direction: the root joint of some rigs faces away from the body (the MANN
+//    dog's by 90°), so Δ's "forward" is another rig's "sideways".
+// Model space, per root frame t (h_t = heading of the root, nec::heading_rotation):
+//   [kRootMotionScale · Δx', Δy', kRootMotionScale · Δz', rot6D(R̃_t), kRootMotionScale · ω_t]
+// with Δ' = Y(h_0) Δ (the body's heading frame: every window starts with its
+// clip's start heading, where preprocessing made the body face +Z, so h_0 is
+// the rig's own offset from the body), R̃_t = Y(h_0 − h_t) R_t (the root
+// orientation with the turning taken out: its heading stays h_0) and the yaw
+// rate ω_t = h_t − h_{t−1} (radians per frame, wrapped; ω_0 = 0). Other
+// joints: [0, 0, 0, rot6D, 0]. Back: R_t = Y(ω_1 + … + ω_t) R̃_t, then Δ from
+// Δ' with the heading of R_0 = R̃_0. Differentiable.
+#pragma once
+
+#include <ATen/core/Tensor.h>
+
+#include <cstdint>
+
+namespace nec::tat {
+
+constexpr int64_t kModelChannels = 10;
+// The root's motion per frame (Δx, Δz ~0.04 body sizes, ω ~0.02 rad while
+// walking) is far smaller than every other feature: the networks read and
+// predict it times this, and the loss compares it at that scale.
+constexpr double kRootMotionScale = 20.0;
+
+// features (B, T > 0, J > 0, 9) -> (B, T, J, kModelChannels); std::invalid_argument on other shapes.
+at::Tensor features_to_model_space(const at::Tensor& features);
+// (B, T > 0, J > 0, kModelChannels) -> Θ (B, T, J, 9).
+at::Tensor model_space_to_features(const at::Tensor& model);
+
+}  // namespace nec::tat
