@@ -41,6 +41,7 @@ MASKED_SCORE = -1e9      # tokenizer.cpp kMaskedScore
 LAPLACE_EPSILON = 1e-5   # quantizer.cpp kLaplaceEpsilon
 TINY_SQUARED_NORM = 1e-20  # fk.cpp kTinySquaredNorm
 ROOT_MOTION_SCALE = 20.0  # model_space.h kRootMotionScale
+YAW_RATE_SCALE = 60.0     # model_space.h kYawRateScale
 MODEL_CHANNELS = 10       # model_space.h kModelChannels
 
 
@@ -359,7 +360,7 @@ def features_to_model_space(features):
         step = torch.matmul(heading[:, :-1].transpose(-1, -2), heading[:, 1:])
         rate = torch.cat([rate.narrow(1, 0, 1), torch.atan2(step[..., 0, 2], step[..., 0, 0])], 1)
     model_root = torch.cat([turned_displacement(root, start, ROOT_MOTION_SCALE), matrix_to_rot6d(untwisted),
-                            (rate * ROOT_MOTION_SCALE).unsqueeze(-1)], -1)
+                            (rate * YAW_RATE_SCALE).unsqueeze(-1)], -1)
     others = nn.functional.pad(features.narrow(2, 1, features.size(2) - 1), (0, 1))
     return torch.cat([model_root.unsqueeze(2), others], 2)
 
@@ -368,7 +369,7 @@ def model_space_to_features(model):
     """The inverse: (B, T, J, MODEL_CHANNELS) -> Θ (B, T, J, 9)."""
     root = model.select(2, 0)
     untwisted = rot6d_to_matrix(root.narrow(-1, 3, 6))
-    rate = root.select(-1, 9) / ROOT_MOTION_SCALE
+    rate = root.select(-1, 9) / YAW_RATE_SCALE
     rate = torch.cat([torch.zeros_like(rate.narrow(1, 0, 1)), rate.narrow(1, 1, rate.size(1) - 1)], 1)
     rotation = torch.matmul(yaw_matrix(rate.cumsum(1)), untwisted)
     start = heading_matrix(untwisted.select(1, 0))

@@ -163,7 +163,7 @@ TEST(TatLoss, EachTermRespondsToItsOwnChannels) {
   p[0][frame][0].narrow(0, 3, 6).copy_(
       tat::matrix_to_rot6d(torch::matmul(turn, tat::rot6d_to_matrix(p[0][frame][0].narrow(0, 3, 6)))));
   l = loss_of(p, f.batch);
-  EXPECT_NEAR(l.root, 2.0 * 0.1 * tat::kRootMotionScale / 4.0 / 21.0, 1e-5);
+  EXPECT_NEAR(l.root, 2.0 * 0.1 * tat::kYawRateScale / 4.0 / 21.0, 1e-5);
   EXPECT_GT(l.rotation, 0.0);
   EXPECT_GT(l.position, 0.0);
 

@@ -85,7 +85,7 @@ TEST(TatModelSpace, TheSameWalkOnRigsWhoseRootsFaceDifferentWaysIsTheSameMotion)
   // Rig A's root faces its body: its Δ is Θ's, scaled.
   EXPECT_LT(max_difference(delta(a), delta(on_a) * torch::tensor({kRootMotionScale, 1.0, kRootMotionScale})), 1e-5);
   // The yaw rate is the turn per frame, scaled.
-  EXPECT_NEAR(a[0][5][0][9].item<double>(), 0.15 * kRootMotionScale, 1e-4);
+  EXPECT_NEAR(a[0][5][0][9].item<double>(), 0.15 * tat::kYawRateScale, 1e-4);
   // The turning is taken out of the root orientation: its heading stays at frame 0's.
   const at::Tensor untwisted_b = torch::cat({b.narrow(-1, 0, 9)}, -1);
   for (int64_t t = 0; t < 12; ++t) {
@@ -103,7 +103,7 @@ TEST(TatModelSpace, PredictedYawRateTurnsTheRootAndMovesItAlongTheBody) {
   const double offset = M_PI / 2.0;  // ... but the root faces +X at rest: the body's +Z is the root's -X
   model[0].select(1, 0).select(1, 3).fill_(std::cos(offset));
   model[0].select(1, 0).select(1, 5).fill_(-std::sin(offset));
-  model[0].select(1, 0).select(1, 9).fill_(0.1 * kRootMotionScale);  // 0.1 rad a frame (frame 0's is ignored)
+  model[0].select(1, 0).select(1, 9).fill_(0.1 * tat::kYawRateScale);  // 0.1 rad a frame (frame 0's is ignored)
   model[0].select(1, 0).select(1, 2).fill_(0.05 * kRootMotionScale);  // forward for the body
   const at::Tensor features = model_space_to_features(model);
   for (int64_t t = 0; t < 8; ++t) {

@@ -57,7 +57,7 @@ at::Tensor features_to_model_space(const at::Tensor& features) {
     rate = torch::cat({rate.narrow(1, 0, 1), yaw_angle(step)}, 1);
   }
   const at::Tensor model_root = torch::cat({turned_displacement(root, start, kRootMotionScale),
-                                            matrix_to_rot6d(untwisted), (rate * kRootMotionScale).unsqueeze(-1)},
+                                            matrix_to_rot6d(untwisted), (rate * kYawRateScale).unsqueeze(-1)},
                                            -1);  // (B, T, 10)
   const at::Tensor others = torch::constant_pad_nd(features.narrow(2, 1, features.size(2) - 1), {0, 1});
   return torch::cat({model_root.unsqueeze(2), others}, 2);
@@ -68,7 +68,7 @@ at::Tensor model_space_to_features(const at::Tensor& model) {
   const at::Tensor root = model.select(2, 0);                           // (B, T, 10)
   const at::Tensor untwisted = rot6d_to_matrix(root.narrow(-1, 3, 6));  // R̃_t
   // Y(ω_1 + … + ω_t): frame 0 does not turn (ω_0 is 0 by definition), so R_0 = R̃_0.
-  at::Tensor rate = root.select(-1, 9) / kRootMotionScale;              // (B, T)
+  at::Tensor rate = root.select(-1, 9) / kYawRateScale;              // (B, T)
   rate = torch::cat({torch::zeros_like(rate.narrow(1, 0, 1)), rate.narrow(1, 1, rate.size(1) - 1)}, 1);
   const at::Tensor rotation = torch::matmul(yaw_matrix(rate.cumsum(1)), untwisted);   // R_t
   const at::Tensor start = heading_matrix(untwisted.select(1, 0));                    // H_0

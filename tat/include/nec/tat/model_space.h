@@ -12,7 +12,7 @@
 //  - direction: the root joint of some rigs faces away from the body (the MANN
 //    dog's by 90°), so Δ's "forward" is another rig's "sideways".
 // Model space, per root frame t (h_t = heading of the root, nec::heading_rotation):
-//   [kRootMotionScale · Δx', Δy', kRootMotionScale · Δz', rot6D(R̃_t), kRootMotionScale · ω_t]
+//   [kRootMotionScale · Δx', Δy', kRootMotionScale · Δz', rot6D(R̃_t), kYawRateScale · ω_t]
 // with Δ' = Y(h_0) Δ (the body's heading frame: every window starts with its
 // clip's start heading, where preprocessing made the body face +Z, so h_0 is
 // the rig's own offset from the body), R̃_t = Y(h_0 − h_t) R_t (the root
@@ -31,8 +31,11 @@ namespace nec::tat {
 constexpr int64_t kModelChannels = 10;
 // The root's motion per frame (Δx, Δz ~0.04 body sizes, ω ~0.02 rad while
 // walking) is far smaller than every other feature: the networks read and
-// predict it times this, and the loss compares it at that scale.
-constexpr double kRootMotionScale = 20.0;
+// predict it times these, and the loss compares it at that scale. The yaw
+// rate gets more: its errors add up over a clip (a straight 6.5-s walk came
+// back turned by 44° at 20, by 19° at 60; see README, Measured).
+constexpr double kRootMotionScale = 20.0;  // Δx, Δz
+constexpr double kYawRateScale = 60.0;     // ω
 
 // features (B, T > 0, J > 0, 9) -> (B, T, J, kModelChannels); std::invalid_argument on other shapes.
 at::Tensor features_to_model_space(const at::Tensor& features);
