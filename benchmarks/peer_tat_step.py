@@ -355,10 +355,8 @@ def features_to_model_space(features):
     heading = heading_matrix(rotation)
     start = heading.select(1, 0)
     untwisted = torch.matmul(start.unsqueeze(1), torch.matmul(heading.transpose(-1, -2), rotation))
-    rate = torch.zeros_like(root.select(-1, 0))
-    if features.size(1) > 1:
-        step = torch.matmul(heading[:, :-1].transpose(-1, -2), heading[:, 1:])
-        rate = torch.cat([rate.narrow(1, 0, 1), torch.atan2(step[..., 0, 2], step[..., 0, 0])], 1)
+    step = torch.matmul(heading[:, :-1].transpose(-1, -2), heading[:, 1:])
+    rate = nn.functional.pad(torch.atan2(step[..., 0, 2], step[..., 0, 0]), (1, 0))  # frame 0 does not turn
     model_root = torch.cat([turned_displacement(root, start, ROOT_MOTION_SCALE), matrix_to_rot6d(untwisted),
                             (rate * YAW_RATE_SCALE).unsqueeze(-1)], -1)
     others = nn.functional.pad(features.narrow(2, 1, features.size(2) - 1), (0, 1))
@@ -369,8 +367,7 @@ def model_space_to_features(model):
     """The inverse: (B, T, J, MODEL_CHANNELS) -> Θ (B, T, J, 9)."""
     root = model.select(2, 0)
     untwisted = rot6d_to_matrix(root.narrow(-1, 3, 6))
-    rate = root.select(-1, 9) / YAW_RATE_SCALE
-    rate = torch.cat([torch.zeros_like(rate.narrow(1, 0, 1)), rate.narrow(1, 1, rate.size(1) - 1)], 1)
+    rate = nn.functional.pad(root[:, 1:, 9] / YAW_RATE_SCALE, (1, 0))
     rotation = torch.matmul(yaw_matrix(rate.cumsum(1)), untwisted)
     start = heading_matrix(untwisted.select(1, 0))
     feature_root = torch.cat([turned_displacement(root, start.transpose(-1, -2), 1.0 / ROOT_MOTION_SCALE),

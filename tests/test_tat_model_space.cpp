@@ -87,7 +87,7 @@ TEST(TatModelSpace, TheSameWalkOnRigsWhoseRootsFaceDifferentWaysIsTheSameMotion)
   // The yaw rate is the turn per frame, scaled.
   EXPECT_NEAR(a[0][5][0][9].item<double>(), 0.15 * tat::kYawRateScale, 1e-4);
   // The turning is taken out of the root orientation: its heading stays at frame 0's.
-  const at::Tensor untwisted_b = torch::cat({b.narrow(-1, 0, 9)}, -1);
+  const at::Tensor untwisted_b = b.narrow(-1, 0, 9);
   for (int64_t t = 0; t < 12; ++t) {
     EXPECT_NEAR(heading_at(untwisted_b, t), M_PI / 2.0, 1e-5) << "frame " << t;
     EXPECT_NEAR(heading_at(a.narrow(-1, 0, 9), t), 0.0, 1e-5) << "frame " << t;

@@ -40,6 +40,11 @@ at::Tensor turned_displacement(const at::Tensor& root, const at::Tensor& turn, d
   return delta * factor;
 }
 
+// Yaw rates (B, T - 1) of frames 1.. -> (B, T) with frame 0's, which never turns, 0.
+at::Tensor after_a_still_first_frame(const at::Tensor& later_rates) {
+  return torch::constant_pad_nd(later_rates, {1, 0});
+}
+
 }  // namespace
 
 at::Tensor features_to_model_space(const at::Tensor& features) {
@@ -50,12 +55,9 @@ at::Tensor features_to_model_space(const at::Tensor& features) {
   const at::Tensor start = heading.select(1, 0);                         // H_0 (B, 3, 3)
   // R̃_t = H_0 H_tᵀ R_t; ω_t = angle of H_{t-1}ᵀ H_t.
   const at::Tensor untwisted = torch::matmul(start.unsqueeze(1), torch::matmul(heading.transpose(-1, -2), rotation));
-  at::Tensor rate = torch::zeros_like(root.select(-1, 0));  // (B, T)
-  if (features.size(1) > 1) {
-    const at::Tensor step = torch::matmul(heading.narrow(1, 0, features.size(1) - 1).transpose(-1, -2),
-                                          heading.narrow(1, 1, features.size(1) - 1));
-    rate = torch::cat({rate.narrow(1, 0, 1), yaw_angle(step)}, 1);
-  }
+  const int64_t later = features.size(1) - 1;
+  const at::Tensor step = torch::matmul(heading.narrow(1, 0, later).transpose(-1, -2), heading.narrow(1, 1, later));
+  const at::Tensor rate = after_a_still_first_frame(yaw_angle(step));  // (B, T)
   const at::Tensor model_root = torch::cat({turned_displacement(root, start, kRootMotionScale),
                                             matrix_to_rot6d(untwisted), (rate * kYawRateScale).unsqueeze(-1)},
                                            -1);  // (B, T, 10)
@@ -68,8 +70,8 @@ at::Tensor model_space_to_features(const at::Tensor& model) {
   const at::Tensor root = model.select(2, 0);                           // (B, T, 10)
   const at::Tensor untwisted = rot6d_to_matrix(root.narrow(-1, 3, 6));  // R̃_t
   // Y(ω_1 + … + ω_t): frame 0 does not turn (ω_0 is 0 by definition), so R_0 = R̃_0.
-  at::Tensor rate = root.select(-1, 9) / kYawRateScale;              // (B, T)
-  rate = torch::cat({torch::zeros_like(rate.narrow(1, 0, 1)), rate.narrow(1, 1, rate.size(1) - 1)}, 1);
+  const at::Tensor predicted = root.select(-1, 9) / kYawRateScale;  // (B, T)
+  const at::Tensor rate = after_a_still_first_frame(predicted.narrow(1, 1, predicted.size(1) - 1));
   const at::Tensor rotation = torch::matmul(yaw_matrix(rate.cumsum(1)), untwisted);   // R_t
   const at::Tensor start = heading_matrix(untwisted.select(1, 0));                    // H_0
   const at::Tensor feature_root =

@@ -223,7 +223,7 @@ class NecEncoderImpl : public detail::EncoderImpl {
 };
 
 // NEC decoder: z_t as the virtual joint, MLP([z_t ‖ h_j]) per joint, then per
-// block spatial attention and a temporal upsampling block per token, linear to 9.
+// block spatial attention and a temporal upsampling block per token, linear to kModelChannels.
 class NecDecoderImpl : public detail::DecoderImpl {
  public:
   explicit NecDecoderImpl(const TatConfig& config) {
@@ -289,7 +289,7 @@ class PaddedEncoderImpl : public detail::EncoderImpl {
   at::Tensor forward(const at::Tensor& features, const at::Tensor& joint_mask, const at::Tensor&) override {
     const int64_t b = features.size(0), t = features.size(1), joints = features.size(2);
     const at::Tensor real = features * joint_mask.view({b, 1, joints, 1}).to(features.scalar_type());
-    const at::Tensor padded = torch::constant_pad_nd(real, {0, 0, 0, max_joints_ - joints});  // (B, T, Jmax, kModelChannels)
+    const at::Tensor padded = torch::constant_pad_nd(real, {0, 0, 0, max_joints_ - joints});  // (B, T, Jmax, ·)
     at::Tensor x = torch::relu(input_(padded.view({b, t, kModelChannels * max_joints_}).transpose(1, 2)));
     for (size_t block = 0; block < temporal_->size(); ++block) x = temporal_->ptr<DownBlockImpl>(block)->forward(x);
     return to_latent_(x).transpose(1, 2).contiguous();  // (B, T / r, C)
@@ -316,10 +316,10 @@ class PaddedDecoderImpl : public detail::DecoderImpl {
     const int64_t b = quantized.size(0), joints = joint_mask.size(1);
     at::Tensor x = torch::relu(from_latent_(quantized.transpose(1, 2)));
     for (size_t block = 0; block < temporal_->size(); ++block) x = temporal_->ptr<UpBlockImpl>(block)->forward(x);
-    const at::Tensor channels = output_(x).transpose(1, 2);  // (B, T, 9 Jmax)
+    const at::Tensor channels = output_(x).transpose(1, 2);  // (B, T, kModelChannels Jmax)
     const int64_t t = channels.size(1);
-    const at::Tensor out =
-        channels.reshape({b, t, max_joints_, kModelChannels}).narrow(2, 0, joints) + rest_pose_features(channels.options());
+    const at::Tensor out = channels.reshape({b, t, max_joints_, kModelChannels}).narrow(2, 0, joints) +
+                           rest_pose_features(channels.options());
     return out * joint_mask.view({b, 1, joints, 1}).to(out.scalar_type());
   }
 

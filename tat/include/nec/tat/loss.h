@@ -11,7 +11,7 @@ namespace nec::tat {
 
 struct LossWeights {
   double rotation = 1.0;  // L1 on the rot6D channels of real joints and frames
-  double root = 1.0;      // L1 on the root's motion in model space: body-frame Δ (x, z × kRootMotionScale) and yaw rate (× kYawRateScale)
+  double root = 1.0;      // L1 on the root's motion in model space (model_space.h): body-frame Δ and yaw rate, scaled
   double position = 1.0;  // L1 on FK world positions, root trajectory included (normalized units)
   double velocity = 0.5;  // L1 on frame-to-frame differences of FK positions
 

@@ -15,7 +15,7 @@
 // joints and the virtual joint (padded joints masked); only the virtual joint
 // goes to the quantizer (T / r steps, r = 2^blocks). Decoder: [z_t ‖ h_j] per
 // joint (and z_t as the virtual joint) -> spatial attention -> temporal
-// upsampling (x2 per block, ResNet1D) -> linear to 9. NecVq is NecRvq with a
+// upsampling (x2 per block, ResNet1D) -> linear to the model space's channels. NecVq is NecRvq with a
 // single codebook (quantizer.layers = 1).
 // ZeroPadRvq: the padding baseline. All joints flattened to channels,
 // zero-padded to max_joints (fixed at construction, joint order as in the
