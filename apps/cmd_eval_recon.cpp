@@ -118,7 +118,7 @@ int run_eval_recon(int argc, char** argv) {
         const Features truth = cache.features(i);
         const at::Tensor codes = tat::encode_clip(tokenizer, truth, embeddings[clip.skeleton], session.windows);
         const Features decoded = tat::decode_clip(tokenizer, codes, truth.frame_count, embeddings[clip.skeleton],
-                                                  truth.joint_count, truth.fps, session.windows);
+                                                  skeleton.skeleton, truth.fps, session.windows);
         const ClipTensors t = clip_tensors(truth, skeleton.skeleton);
         const ClipTensors d = clip_tensors(decoded, skeleton.skeleton);
         group.normalized.add(d.features, t.features, t.parents, t.offsets, t.joint_mask, t.frame_mask);

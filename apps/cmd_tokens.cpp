@@ -61,7 +61,7 @@ void decode_onto(TokenizerSession& session, const tat::TokenFile& tokens, const 
           .to(torch::kInt64);
   const Features features =
       tat::decode_clip(*session.model.tokenizer, codes, tokens.frames, session.embed(skeleton, target.canonical_names),
-                       skeleton.joint_count(), tokens.fps, session.windows);
+                       skeleton, tokens.fps, session.windows);
   Clip out{skeleton, decode_features(skeleton, features), {}};
   out = denormalize(out, with_heading(target.normalization, tokens.heading_degrees));
   write_bvh(out_path, out.skeleton, out.motion);

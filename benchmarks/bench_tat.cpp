@@ -43,6 +43,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -232,6 +233,7 @@ void BM_TatTrainStep(benchmark::State& state) {
 
 struct Clip {
   Tokenizer model{nullptr};  // eval mode
+  nec::Skeleton skeleton;    // J joints, a random tree with left and right joints (decode faces it forward)
   nec::Features features;    // kClipFrames x J
   at::Tensor embeddings;     // (J, E)
   at::Tensor codes;          // (S, R) of features
@@ -246,6 +248,15 @@ void build_clip(Clip& c, int64_t joints) {
   c.features.frame_count = static_cast<int>(kClipFrames);
   c.features.joint_count = static_cast<int>(joints);
   c.features.data.assign(theta.data_ptr<float>(), theta.data_ptr<float>() + theta.numel());
+  std::mt19937 rng(kSeed);
+  std::normal_distribution<double> offset(0.0, 0.1);
+  for (int64_t j = 0; j < joints; ++j) {
+    const int parent = j == 0 ? -1 : static_cast<int>(std::uniform_int_distribution<int64_t>(0, j - 1)(rng));
+    const std::string name = j == 0 ? "Hips" : (j % 2 ? "Left" : "Right") + std::to_string(j);
+    c.skeleton.add_joint(name, parent, j == 0 ? nec::Vec3::Zero() : nec::Vec3(offset(rng), offset(rng), offset(rng)),
+                         j == 0 ? nec::ChannelLayout::position_rotations(nec::EulerOrder::ZXY)
+                                : nec::ChannelLayout::rotations(nec::EulerOrder::ZXY));
+  }
   c.embeddings = torch::randn({joints, config.model.joint_embedding_dim});
   c.model = Tokenizer(config.model);
   c.model->eval();
@@ -268,10 +279,9 @@ void BM_TatEncodeClip(benchmark::State& state) {
 void BM_TatDecodeClip(benchmark::State& state) {
   torch::set_num_threads(static_cast<int>(state.range(1)));
   Clip& c = clip(state.range(0));
-  const int joints = static_cast<int>(state.range(0));
   for (auto _ : state) {
     const nec::Features out = nec::tat::decode_clip(*c.model, c.codes, static_cast<int>(kClipFrames), c.embeddings,
-                                                    joints, 30.0, windows());
+                                                    c.skeleton, 30.0, windows());
     benchmark::DoNotOptimize(out.data.data());
   }
   state.counters["frames_per_s"] =

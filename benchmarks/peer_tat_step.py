@@ -349,30 +349,44 @@ def turned_displacement(root, turn, scale):
 
 
 def features_to_model_space(features):
-    """(B, T, J, 9) -> (B, T, J, MODEL_CHANNELS): body-frame Δ, untwisted root orientation, yaw rate."""
+    """(B, T, J, 9) -> (B, T, J, MODEL_CHANNELS): body-frame Δ, root orientation without its heading, yaw rate."""
     root = features.select(2, 0)
     rotation = rot6d_to_matrix(root.narrow(-1, 3, 6))
     heading = heading_matrix(rotation)
-    start = heading.select(1, 0)
-    untwisted = torch.matmul(start.unsqueeze(1), torch.matmul(heading.transpose(-1, -2), rotation))
+    untwisted = torch.matmul(heading.transpose(-1, -2), rotation)
     step = torch.matmul(heading[:, :-1].transpose(-1, -2), heading[:, 1:])
     rate = nn.functional.pad(torch.atan2(step[..., 0, 2], step[..., 0, 0]), (1, 0))  # frame 0 does not turn
-    model_root = torch.cat([turned_displacement(root, start, ROOT_MOTION_SCALE), matrix_to_rot6d(untwisted),
-                            (rate * YAW_RATE_SCALE).unsqueeze(-1)], -1)
+    model_root = torch.cat([turned_displacement(root, heading.select(1, 0), ROOT_MOTION_SCALE),
+                            matrix_to_rot6d(untwisted), (rate * YAW_RATE_SCALE).unsqueeze(-1)], -1)
     others = nn.functional.pad(features.narrow(2, 1, features.size(2) - 1), (0, 1))
     return torch.cat([model_root.unsqueeze(2), others], 2)
 
 
-def model_space_to_features(model):
-    """The inverse: (B, T, J, MODEL_CHANNELS) -> Θ (B, T, J, 9)."""
+def model_space_to_features(model, start_heading):
+    """The inverse, with the root's heading at frame 0 (B): (B, T, J, MODEL_CHANNELS) -> Θ (B, T, J, 9)."""
     root = model.select(2, 0)
     untwisted = rot6d_to_matrix(root.narrow(-1, 3, 6))
     rate = nn.functional.pad(root[:, 1:, 9] / YAW_RATE_SCALE, (1, 0))
-    rotation = torch.matmul(yaw_matrix(rate.cumsum(1)), untwisted)
-    start = heading_matrix(untwisted.select(1, 0))
-    feature_root = torch.cat([turned_displacement(root, start.transpose(-1, -2), 1.0 / ROOT_MOTION_SCALE),
-                              matrix_to_rot6d(rotation)], -1)
+    start = start_heading.to(model.dtype).view(-1, 1)
+    rotation = torch.matmul(yaw_matrix(start + rate.cumsum(1)), untwisted)
+    feature_root = torch.cat([turned_displacement(root, yaw_matrix(start[:, 0]).transpose(-1, -2),
+                                                  1.0 / ROOT_MOTION_SCALE), matrix_to_rot6d(rotation)], -1)
     return torch.cat([feature_root.unsqueeze(2), model.narrow(2, 1, model.size(2) - 1).narrow(-1, 0, 9)], 2)
+
+
+def start_heading(features):
+    """model_space.cpp start_heading: the root's heading at frame 0, (B) radians."""
+    heading = heading_matrix(rot6d_to_matrix(features[:, 0, 0, 3:9]))
+    return torch.atan2(heading[..., 0, 2], heading[..., 0, 0])
+
+
+def distinct_joint_embeddings(embeddings, joint_mask):
+    """tokenizer.cpp distinct_joint_embeddings: centred over the skeleton's real joints, unit RMS."""
+    real = joint_mask.to(embeddings.dtype).unsqueeze(-1)
+    count = real.sum(1, keepdim=True).clamp_min(1.0)
+    centred = (embeddings - (embeddings * real).sum(1, keepdim=True) / count) * real
+    mean_square = centred.pow(2).sum((1, 2), keepdim=True) / (count * float(embeddings.size(2)))
+    return centred * mean_square.clamp_min(1e-12).rsqrt()
 
 
 class Tokenizer(nn.Module):
@@ -385,13 +399,14 @@ class Tokenizer(nn.Module):
 
     def forward(self, features, joint_mask, frame_mask, joint_embeddings):
         joint_mask = joint_mask.to(torch.bool)
+        joint_embeddings = distinct_joint_embeddings(joint_embeddings, joint_mask)
         latent = self.encoder(features_to_model_space(features), joint_mask, joint_embeddings)  # (B, S, C)
         b, s, code_dim = latent.shape
         step_mask = frame_mask.to(torch.bool).reshape(b, s, self.downsampling).any(-1)
         quantized, codes, commitment, perplexity = self.quantizer(latent.reshape(b * s, code_dim),
                                                                   step_mask.reshape(b * s))
         reconstruction = model_space_to_features(self.decoder(quantized.view(b, s, code_dim), joint_mask,
-                                                              joint_embeddings))
+                                                              joint_embeddings), start_heading(features))
         return reconstruction, codes.view(b, s, -1), commitment, perplexity
 
 

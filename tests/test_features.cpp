@@ -79,6 +79,26 @@ TEST(Features, TurnToHeadingTurnsTheWholeMotionAboutItsStart) {
   for (size_t k = 0; k < turned.data.size(); ++k) EXPECT_NEAR(turned.data[k], original.data[k], 1e-5) << k;
 }
 
+TEST(Features, TurnBodyTurnsTheBodyAroundTheRootButKeepsItsPath) {
+  std::mt19937 rng(45);
+  const Skeleton s = testing::random_skeleton(rng, 5);
+  const Motion m = testing::random_motion(rng, s, 6);
+  Features f = encode_features(s, m);
+  const double start = root_heading(f, 0);
+  turn_body(f, 0.4);
+  EXPECT_NEAR(std::remainder(root_heading(f, 0) - start - 0.4, 2.0 * M_PI), 0.0, 1e-5);
+  const Pose a = forward_kinematics(s, m);
+  const Pose b = forward_kinematics(s, decode_features(s, f));
+  const Quat turn = axis_rotation(1, 0.4 * 180.0 / M_PI);
+  for (int t = 0; t < m.frame_count; ++t) {
+    EXPECT_LT((b.position(t, 0) - a.position(t, 0)).norm(), 1e-5) << "the root's path, frame " << t;
+    for (int j = 1; j < s.joint_count(); ++j) {
+      const Vec3 expected = turn * (a.position(t, j) - a.position(t, 0));
+      EXPECT_LT((b.position(t, j) - b.position(t, 0) - expected).norm(), 1e-5) << "frame " << t << " joint " << j;
+    }
+  }
+}
+
 void expect_inverse(const Skeleton& s, const Motion& m, double tolerance) {
   const Motion back = decode_features(s, encode_features(s, m));
   const Pose a = forward_kinematics(s, m);

@@ -89,6 +89,37 @@ TEST(Preprocess, HeadingAndUpAxisInvariance) {
   EXPECT_EQ(detect_up_axis(walking_biped()), UpAxis::Y);
 }
 
+TEST(Preprocess, FaceForwardAtStartUndoesATurnOfTheBody) {
+  const PreparedClip p = preprocess(walking_biped(), "biped.bvh");
+  ASSERT_TRUE(p.report.accepted());
+  const Features truth = encode_features(p.clip.skeleton, p.clip.motion);
+  // Facing +Z already: nothing to do.
+  Features same = truth;
+  EXPECT_NEAR(face_forward_at_start(same, p.clip.skeleton), 0.0, 1e-6);
+  // A decoder that put the body 100 degrees off: turned back onto the truth, path and pose.
+  Features off = truth;
+  turn_body(off, 100.0 * M_PI / 180.0);
+  EXPECT_NEAR(face_forward_at_start(off, p.clip.skeleton), -100.0 * M_PI / 180.0, 1e-5);
+  for (size_t k = 0; k < off.data.size(); ++k) EXPECT_NEAR(off.data[k], truth.data[k], 1e-5) << k;
+  // Without left or right joints: towards the head (put ahead of the spine), whatever way it faces.
+  Skeleton unnamed = p.clip.skeleton;
+  for (int j = 0; j < unnamed.joint_count(); ++j) {
+    if (unnamed.names[j] != "Head") unnamed.names[j] = "joint" + std::to_string(j);
+  }
+  unnamed.offsets[2] = Vec3(0.0, 0.1, 0.2);
+  Features head_first = truth;
+  face_forward_at_start(head_first, unnamed);  // faces +Z by its head now
+  turn_body(head_first, 0.5);
+  EXPECT_NEAR(face_forward_at_start(head_first, unnamed), -0.5, 1e-5);
+  // With neither: nothing.
+  unnamed.names[2] = "joint2";
+  Features nothing = truth;
+  EXPECT_EQ(face_forward_at_start(nothing, unnamed), 0.0);
+  for (size_t k = 0; k < nothing.data.size(); ++k) EXPECT_EQ(nothing.data[k], truth.data[k]) << k;
+  std::mt19937 rng(1);
+  EXPECT_THROW(face_forward_at_start(nothing, testing::random_skeleton(rng, 4)), std::invalid_argument);
+}
+
 TEST(Preprocess, MergesDummyRootKeepingPositions) {
   Clip raw = walking_biped();
   // Wrap in a dummy root at the origin that moves and turns the whole body.

@@ -56,18 +56,21 @@ TEST(TatModelSpace, RoundTripsRandomClips) {
     EXPECT_TRUE(torch::equal(model.narrow(2, 1, 5).narrow(-1, 0, 9), features.narrow(2, 1, 5))) << "other joints as Θ";
     EXPECT_EQ(model.narrow(2, 1, 5).select(-1, 9).abs().max().item<double>(), 0.0);
     EXPECT_EQ(model[0][0][0][9].item<double>(), 0.0) << "no yaw rate at frame 0";
-    const at::Tensor back = model_space_to_features(model);
+    for (int64_t t = 0; t < 15; ++t) EXPECT_NEAR(heading_at(model.narrow(-1, 0, 9), t), 0.0, 1e-5) << "no heading";
+    const at::Tensor back = model_space_to_features(model, tat::start_heading(features));
     EXPECT_LT(max_difference(back, features), 2e-5) << "clip " << k;
+    EXPECT_NEAR(tat::start_heading(features).item<double>(), heading_at(features, 0), 1e-6);
   }
   EXPECT_THROW(features_to_model_space(torch::zeros({1, 0, 4, 9})), std::invalid_argument);
   EXPECT_THROW(features_to_model_space(torch::zeros({1, 3, 4, 10})), std::invalid_argument);
-  EXPECT_THROW(model_space_to_features(torch::zeros({1, 3, 4, 9})), std::invalid_argument);
+  EXPECT_THROW(model_space_to_features(torch::zeros({1, 3, 4, 9}), torch::zeros({1})), std::invalid_argument);
+  EXPECT_THROW(model_space_to_features(torch::zeros({1, 3, 4, 10}), torch::zeros({2})), std::invalid_argument);
 }
 
 // The same turning walk on two rigs whose roots face different ways (rig B's
 // root is turned 90° about +Y against rig A's, as the MANN dog's against a
 // human's): Θ holds different root displacements; model space holds the same
-// displacement and yaw rate, and root orientations that differ by the offset.
+// motion, root orientations included: where the root faces is not in it.
 TEST(TatModelSpace, TheSameWalkOnRigsWhoseRootsFaceDifferentWaysIsTheSameMotion) {
   std::mt19937 rng(5);
   const Skeleton s = testing::random_skeleton(rng, 4);
@@ -86,11 +89,37 @@ TEST(TatModelSpace, TheSameWalkOnRigsWhoseRootsFaceDifferentWaysIsTheSameMotion)
   EXPECT_LT(max_difference(delta(a), delta(on_a) * torch::tensor({kRootMotionScale, 1.0, kRootMotionScale})), 1e-5);
   // The yaw rate is the turn per frame, scaled.
   EXPECT_NEAR(a[0][5][0][9].item<double>(), 0.15 * tat::kYawRateScale, 1e-4);
-  // The turning is taken out of the root orientation: its heading stays at frame 0's.
-  const at::Tensor untwisted_b = b.narrow(-1, 0, 9);
-  for (int64_t t = 0; t < 12; ++t) {
-    EXPECT_NEAR(heading_at(untwisted_b, t), M_PI / 2.0, 1e-5) << "frame " << t;
-    EXPECT_NEAR(heading_at(a.narrow(-1, 0, 9), t), 0.0, 1e-5) << "frame " << t;
+  // The heading is taken out of the root orientation: the lean and roll left are the same on both rigs.
+  EXPECT_LT(max_difference(a.select(2, 0).narrow(-1, 3, 6), b.select(2, 0).narrow(-1, 3, 6)), 1e-5);
+  // Back with each rig's start heading: each rig's Θ.
+  EXPECT_LT(max_difference(model_space_to_features(b, torch::full({1}, M_PI / 2.0)), on_b), 2e-5);
+  EXPECT_LT(max_difference(model_space_to_features(a, torch::zeros({1})), on_a), 2e-5);
+}
+
+// Another start heading turns the body but not its path.
+TEST(TatModelSpace, TheStartHeadingTurnsTheBodyNotItsPath) {
+  std::mt19937 rng(7);
+  const Skeleton s = testing::random_skeleton(rng, 5);
+  const at::Tensor features = tensor_of(s, turning_walk(testing::random_motion(rng, s, 10), 0.1, 0.3));
+  const at::Tensor model = features_to_model_space(features);
+  const at::Tensor parents = torch::tensor(std::vector<int64_t>(s.parents.begin(), s.parents.end())).view({1, 5});
+  at::Tensor offsets = torch::zeros({1, 5, 3});
+  for (int j = 0; j < 5; ++j) {
+    for (int k = 0; k < 3; ++k) offsets[0][j][k] = s.offsets[j][k];
+  }
+  const at::Tensor true_positions = tat::features_to_positions(features, parents, offsets).positions;
+  const at::Tensor turned = model_space_to_features(model, tat::start_heading(features) + 0.7);
+  const at::Tensor turned_positions = tat::features_to_positions(turned, parents, offsets).positions;
+  // The root follows the same path ...
+  EXPECT_LT(max_difference(turned_positions.select(2, 0), true_positions.select(2, 0)), 1e-5);
+  // ... and every joint around it is turned by 0.7 about +Y.
+  const at::Tensor turn = torch::tensor({std::cos(0.7), 0.0, std::sin(0.7), 0.0, 1.0, 0.0, -std::sin(0.7), 0.0,
+                                         std::cos(0.7)}).view({3, 3}).to(torch::kFloat32);
+  const at::Tensor around = true_positions - true_positions.narrow(2, 0, 1);
+  const at::Tensor turned_around = turned_positions - turned_positions.narrow(2, 0, 1);
+  EXPECT_LT(max_difference(turned_around, torch::matmul(around, turn.t())), 1e-5);
+  for (int64_t t = 0; t < 10; ++t) {
+    EXPECT_NEAR(std::remainder(heading_at(turned, t) - heading_at(features, t) - 0.7, 2 * M_PI), 0.0, 1e-5);
   }
 }
 
@@ -98,14 +127,12 @@ TEST(TatModelSpace, TheSameWalkOnRigsWhoseRootsFaceDifferentWaysIsTheSameMotion)
 // its sum, a body-frame Δ moves it along the body's heading.
 TEST(TatModelSpace, PredictedYawRateTurnsTheRootAndMovesItAlongTheBody) {
   at::Tensor model = torch::zeros({1, 8, 2, kModelChannels});
-  model.narrow(-1, 3, 1).fill_(1.0);  // identity rot6D everywhere ...
+  model.narrow(-1, 3, 1).fill_(1.0);  // identity rot6D everywhere
   model.narrow(-1, 7, 1).fill_(1.0);
-  const double offset = M_PI / 2.0;  // ... but the root faces +X at rest: the body's +Z is the root's -X
-  model[0].select(1, 0).select(1, 3).fill_(std::cos(offset));
-  model[0].select(1, 0).select(1, 5).fill_(-std::sin(offset));
   model[0].select(1, 0).select(1, 9).fill_(0.1 * tat::kYawRateScale);  // 0.1 rad a frame (frame 0's is ignored)
   model[0].select(1, 0).select(1, 2).fill_(0.05 * kRootMotionScale);  // forward for the body
-  const at::Tensor features = model_space_to_features(model);
+  const double offset = M_PI / 2.0;  // the root faces +X at frame 0: the body's +Z is the root's -X
+  const at::Tensor features = model_space_to_features(model, torch::full({1}, offset));
   for (int64_t t = 0; t < 8; ++t) {
     EXPECT_NEAR(std::remainder(heading_at(features, t) - offset - 0.1 * t, 2 * M_PI), 0.0, 1e-5) << "frame " << t;
   }
@@ -129,7 +156,7 @@ TEST(TatModelSpace, ZeroPaddingGivesFiniteValuesAndGradients) {
   at::Tensor features = torch::cat({tensor_of(s, testing::random_motion(rng, s, 5)), torch::zeros({1, 3, 3, 9})}, 1);
   features.requires_grad_(true);
   const at::Tensor model = features_to_model_space(features);
-  const at::Tensor back = model_space_to_features(model.detach().requires_grad_(true));
+  const at::Tensor back = model_space_to_features(model.detach().requires_grad_(true), tat::start_heading(features));
   (model.sum() + back.sum()).backward();
   EXPECT_TRUE(torch::isfinite(model).all().item<bool>());
   EXPECT_TRUE(torch::isfinite(back).all().item<bool>());

@@ -3,6 +3,7 @@
 #include "nec/motion/features.h"
 #include "nec/motion/preprocess.h"
 #include "nec/tat/loss.h"
+#include "nec/tat/model_space.h"
 #include "nec/tat/tokenizer.h"
 #include "nec/tat/training.h"
 #include "nec/zoo/creature.h"
@@ -226,6 +227,33 @@ TEST(TatTokenizer, MaskingInvariance) {
   }
 }
 
+TEST(TatTokenizer, NecReadsWhatTellsASkeletonsJointsApart) {
+  // Only the differences between one skeleton's joint embeddings count: a part shared by all its joints, or
+  // their overall scale, changes nothing; one joint's own embedding does.
+  torch::manual_seed(6);
+  std::mt19937 rng(6);
+  const RandomBatch pair = random_batch(rng, {5, 11}, 16);
+  for (TokenizerKind kind : {TokenizerKind::NecRvq, TokenizerKind::NecVq}) {
+    tat::Tokenizer model(small_config(kind));
+    model->forward(pair.batch.features, pair.batch.joint_mask, pair.batch.frame_mask, pair.embeddings);
+    model->eval();
+    torch::NoGradGuard no_grad;
+    const auto reconstruct = [&](const at::Tensor& embeddings) {
+      return model->forward(pair.batch.features, pair.batch.joint_mask, pair.batch.frame_mask, embeddings)
+          .reconstruction;
+    };
+    const at::Tensor reference = reconstruct(pair.embeddings);
+    // Item 0 shifted by a common vector on its real joints and scaled by 3; item 1 scaled by 0.5.
+    at::Tensor moved = pair.embeddings.clone();
+    moved[0].narrow(0, 0, 5).add_(torch::randn({1, 16}) * 4.0).mul_(3.0);
+    moved[1].mul_(0.5);
+    EXPECT_LT((reconstruct(moved) - reference).abs().max().item<double>(), 1e-4) << tat::to_string(kind);
+    at::Tensor one_joint = pair.embeddings.clone();
+    one_joint[1][3].add_(torch::randn({16}));
+    EXPECT_GT((reconstruct(one_joint)[1] - reference[1]).abs().max().item<double>(), 1e-3) << tat::to_string(kind);
+  }
+}
+
 TEST(TatTokenizer, DecodingTheCodesGivesTheReconstruction) {
   torch::manual_seed(5);
   std::mt19937 rng(5);
@@ -238,7 +266,7 @@ TEST(TatTokenizer, DecodingTheCodesGivesTheReconstruction) {
     torch::NoGradGuard no_grad;
     const TokenizerOutput out = model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, embeddings);
     const at::Tensor latent = model->codes_to_latent(out.codes);
-    const at::Tensor decoded = model->decode(latent, x.batch.joint_mask, embeddings);
+    const at::Tensor decoded = model->decode(latent, x.batch.joint_mask, embeddings, tat::start_heading(x.batch.features));
     const double difference = (decoded - out.reconstruction).abs().max().item<double>();
     EXPECT_LT(difference, 1e-5) << tat::to_string(kind);
     // encode -> quantize gives the same codes.

@@ -71,15 +71,30 @@ double root_heading(const Features& f, int frame) {
   return std::remainder(heading_angle(Quat(root_rotation(f, frame))), 2.0 * M_PI);
 }
 
+namespace {
+
+// Premultiplies every root orientation by `turn`; with keep_path, turns every displacement back by it.
+void turn_root(Features& f, const Mat3& turn, bool keep_path) {
+  for (int t = 0; t < f.frame_count && f.joint_count > 0; ++t) {
+    const Rot6 r6 = matrix_to_rot6d(turn * root_rotation(f, t));
+    for (int k = 0; k < 6; ++k) f.at(t, 0, 3 + k) = static_cast<float>(r6[k]);
+    if (!keep_path) continue;
+    const Vec3 delta = turn.transpose() * Vec3(f.at(t, 0, 0), f.at(t, 0, 1), f.at(t, 0, 2));
+    for (int k = 0; k < 3; ++k) f.at(t, 0, k) = static_cast<float>(delta[k]);
+  }
+}
+
+}  // namespace
+
 double turn_to_heading(Features& f, double heading) {
   if (f.frame_count == 0 || f.joint_count == 0) return 0.0;
   const double angle = std::remainder(heading - root_heading(f, 0), 2.0 * M_PI);
-  const Mat3 turn = Eigen::AngleAxisd(angle, Vec3::UnitY()).toRotationMatrix();
-  for (int t = 0; t < f.frame_count; ++t) {
-    const Rot6 r6 = matrix_to_rot6d(turn * root_rotation(f, t));
-    for (int k = 0; k < 6; ++k) f.at(t, 0, 3 + k) = static_cast<float>(r6[k]);
-  }
+  turn_root(f, Eigen::AngleAxisd(angle, Vec3::UnitY()).toRotationMatrix(), /*keep_path=*/false);
   return angle;
+}
+
+void turn_body(Features& f, double angle) {
+  turn_root(f, Eigen::AngleAxisd(angle, Vec3::UnitY()).toRotationMatrix(), /*keep_path=*/true);
 }
 
 }  // namespace nec

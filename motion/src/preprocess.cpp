@@ -4,6 +4,7 @@
 
 #include "nec/motion/bvh.h"
 #include "nec/motion/error.h"
+#include "nec/motion/features.h"
 #include "nec/motion/kinematics.h"
 #include "nec/motion/names.h"
 
@@ -11,6 +12,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace nec {
 namespace {
@@ -44,13 +47,8 @@ std::vector<Vec3> sampled_positions(const Clip& clip, int max_frames, int& frame
   return positions;
 }
 
-// Horizontal forward direction of frame 0 (after +Y is up), and how it was found.
-bool frame0_forward(const Clip& clip, Vec3& forward, std::string& how) {
-  const Skeleton& s = clip.skeleton;
-  const Motion& m = clip.motion;
-  const Pose pose = forward_kinematics(s, m.slice(0, 1));
-  const double diameter = std::max(s.diameter(), 1e-12);
-  // 1. Left/right joints: forward = left x up.
+// Horizontal forward direction of a pose (+Y up) from its left and right joints: left x up.
+bool forward_from_sides(const Skeleton& s, const Pose& pose, Vec3& forward) {
   Vec3 left = Vec3::Zero(), right = Vec3::Zero();
   int left_count = 0, right_count = 0;
   for (int j = 0; j < s.joint_count(); ++j) {
@@ -63,33 +61,46 @@ bool frame0_forward(const Clip& clip, Vec3& forward, std::string& how) {
       ++right_count;
     }
   }
-  if (left_count > 0 && right_count > 0) {
-    Vec3 lateral = left / left_count - right / right_count;
-    lateral.y() = 0.0;
-    if (lateral.norm() > 0.02 * diameter) {
-      forward = lateral.cross(Vec3::UnitY()).normalized();
-      how = "from its left and right joints";
-      return true;
-    }
-  }
-  // 2. Direction of travel over the clip.
-  Vec3 travel = m.translation(m.frame_count - 1, 0) - m.translation(0, 0);
-  travel.y() = 0.0;
-  if (travel.norm() > 0.1 * diameter) {
-    forward = travel.normalized();
-    how = "from its direction of travel";
-    return true;
-  }
-  // 3. Towards the head.
+  if (left_count == 0 || right_count == 0) return false;
+  Vec3 lateral = left / left_count - right / right_count;
+  lateral.y() = 0.0;
+  if (lateral.norm() <= 0.02 * std::max(s.diameter(), 1e-12)) return false;
+  forward = lateral.cross(Vec3::UnitY()).normalized();
+  return true;
+}
+
+// ... from the root towards the first joint named like a head.
+bool forward_from_head(const Skeleton& s, const Pose& pose, Vec3& forward) {
   for (int j = 0; j < s.joint_count(); ++j) {
     if (canonical_joint_name(s.names[j]).find("head") == std::string::npos) continue;
     Vec3 to_head = pose.position(0, j) - pose.position(0, 0);
     to_head.y() = 0.0;
-    if (to_head.norm() > 0.05 * diameter) {
+    if (to_head.norm() > 0.05 * std::max(s.diameter(), 1e-12)) {
       forward = to_head.normalized();
-      how = "from the direction of its head";
       return true;
     }
+  }
+  return false;
+}
+
+// Horizontal forward direction of frame 0 (after +Y is up), and how it was found.
+bool frame0_forward(const Clip& clip, Vec3& forward, std::string& how) {
+  const Motion& m = clip.motion;
+  const Pose pose = forward_kinematics(clip.skeleton, m.slice(0, 1));
+  if (forward_from_sides(clip.skeleton, pose, forward)) {
+    how = "from its left and right joints";
+    return true;
+  }
+  Vec3 travel = m.translation(m.frame_count - 1, 0) - m.translation(0, 0);
+  travel.y() = 0.0;
+  if (travel.norm() > 0.1 * std::max(clip.skeleton.diameter(), 1e-12)) {
+    forward = travel.normalized();
+    how = "from its direction of travel";
+    return true;
+  }
+  if (forward_from_head(clip.skeleton, pose, forward)) {
+    how = "from the direction of its head";
+    return true;
   }
   return false;
 }
@@ -352,6 +363,23 @@ PreparedClip preprocess_file(const std::string& path, const PreprocessOptions& o
   PreparedClip prepared = preprocess(read_bvh(path), path, options);
   if (!prepared.report.accepted()) throw InputError(path, 0, "rejected by preprocessing: " + prepared.report.rejection);
   return prepared;
+}
+
+double face_forward_at_start(Features& features, const Skeleton& skeleton) {
+  if (features.joint_count != skeleton.joint_count()) {
+    throw std::invalid_argument("face_forward_at_start: the features have " + std::to_string(features.joint_count) +
+                                " joints, the skeleton " + std::to_string(skeleton.joint_count()));
+  }
+  if (features.frame_count == 0) return 0.0;
+  Features first = features;
+  first.frame_count = 1;
+  first.data.resize(static_cast<size_t>(features.joint_count) * kFeatureSize);
+  const Pose pose = forward_kinematics(skeleton, decode_features(skeleton, first));
+  Vec3 forward;
+  if (!forward_from_sides(skeleton, pose, forward) && !forward_from_head(skeleton, pose, forward)) return 0.0;
+  const double angle = -std::atan2(forward.x(), forward.z());  // turns forward onto +Z
+  turn_body(features, angle);
+  return angle;
 }
 
 }  // namespace nec

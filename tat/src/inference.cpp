@@ -2,6 +2,7 @@
 #include "nec/tat/inference.h"
 
 #include "nec/motion/error.h"
+#include "nec/motion/preprocess.h"
 #include "nec/owo/graph.h"
 #include "nec/owo/joint_names.h"
 #include "nec/tat/fk.h"
@@ -142,7 +143,7 @@ at::Tensor encode_clip(TokenizerImpl& tokenizer, const Features& features, const
 }
 
 Features decode_clip(TokenizerImpl& tokenizer, const at::Tensor& codes, int frame_count, const at::Tensor& embeddings,
-                     int joint_count, double fps, const WindowOptions& windows) {
+                     const Skeleton& skeleton, double fps, const WindowOptions& windows) {
   require_eval(tokenizer);
   const int64_t r = tokenizer.config().downsampling();
   windows.validate(r);
@@ -155,6 +156,7 @@ Features decode_clip(TokenizerImpl& tokenizer, const at::Tensor& codes, int fram
   const WindowPlan plan = plan_windows(frame_count, windows, r);
   const int64_t count = static_cast<int64_t>(plan.starts.size());
   const int64_t window_steps = plan.length / r;
+  const int64_t joint_count = skeleton.joint_count();
 
   c10::InferenceMode inference;
   std::vector<at::Tensor> window_codes;
@@ -164,7 +166,7 @@ Features decode_clip(TokenizerImpl& tokenizer, const at::Tensor& codes, int fram
   }
   const auto [batch_embeddings, mask] = skeleton_inputs(embeddings, joint_count, count);
   const at::Tensor latent = tokenizer.codes_to_latent(torch::stack(window_codes));
-  // Each window starts with the clip's start heading, as it was encoded: turn it to go on from the one before.
+  // Each window is decoded facing 0 at its frame 0: turn it to go on from the one before.
   at::Tensor decoded = continue_window_headings(
       tokenizer.decode(latent, mask, batch_embeddings).to(torch::kFloat32), plan.starts);  // (n, length, J, 9)
   // Blend in a space where windows agree: absolute root height instead of Δy.
@@ -195,6 +197,7 @@ Features decode_clip(TokenizerImpl& tokenizer, const at::Tensor& codes, int fram
   out.joint_count = joint_count;
   out.fps = fps;
   out.data.assign(blended.data_ptr<float>(), blended.data_ptr<float>() + blended.numel());
+  face_forward_at_start(out, skeleton);
   return out;
 }
 

@@ -52,33 +52,41 @@ at::Tensor features_to_model_space(const at::Tensor& features) {
   const at::Tensor root = features.select(2, 0);                        // (B, T, 9)
   const at::Tensor rotation = rot6d_to_matrix(root.narrow(-1, 3, 6));    // (B, T, 3, 3)
   const at::Tensor heading = heading_matrix(rotation);                   // H_t
-  const at::Tensor start = heading.select(1, 0);                         // H_0 (B, 3, 3)
-  // R̃_t = H_0 H_tᵀ R_t; ω_t = angle of H_{t-1}ᵀ H_t.
-  const at::Tensor untwisted = torch::matmul(start.unsqueeze(1), torch::matmul(heading.transpose(-1, -2), rotation));
+  // R̃_t = H_tᵀ R_t; ω_t = angle of H_{t-1}ᵀ H_t.
+  const at::Tensor untwisted = torch::matmul(heading.transpose(-1, -2), rotation);
   const int64_t later = features.size(1) - 1;
   const at::Tensor step = torch::matmul(heading.narrow(1, 0, later).transpose(-1, -2), heading.narrow(1, 1, later));
   const at::Tensor rate = after_a_still_first_frame(yaw_angle(step));  // (B, T)
-  const at::Tensor model_root = torch::cat({turned_displacement(root, start, kRootMotionScale),
+  const at::Tensor model_root = torch::cat({turned_displacement(root, heading.select(1, 0), kRootMotionScale),
                                             matrix_to_rot6d(untwisted), (rate * kYawRateScale).unsqueeze(-1)},
                                            -1);  // (B, T, 10)
   const at::Tensor others = torch::constant_pad_nd(features.narrow(2, 1, features.size(2) - 1), {0, 1});
   return torch::cat({model_root.unsqueeze(2), others}, 2);
 }
 
-at::Tensor model_space_to_features(const at::Tensor& model) {
+at::Tensor model_space_to_features(const at::Tensor& model, const at::Tensor& start_heading) {
   check_shape(model, kModelChannels, "model_space_to_features");
+  const int64_t b = model.size(0);
+  if (!start_heading.defined() || start_heading.dim() != 1 || start_heading.size(0) != b) {
+    throw std::invalid_argument("model_space_to_features: start_heading must be (B) = (" + std::to_string(b) + ")");
+  }
   const at::Tensor root = model.select(2, 0);                           // (B, T, 10)
   const at::Tensor untwisted = rot6d_to_matrix(root.narrow(-1, 3, 6));  // R̃_t
-  // Y(ω_1 + … + ω_t): frame 0 does not turn (ω_0 is 0 by definition), so R_0 = R̃_0.
+  // h_0 + ω_1 + … + ω_t: frame 0 does not turn (ω_0 is 0 by definition).
   const at::Tensor predicted = root.select(-1, 9) / kYawRateScale;  // (B, T)
   const at::Tensor rate = after_a_still_first_frame(predicted.narrow(1, 1, predicted.size(1) - 1));
-  const at::Tensor rotation = torch::matmul(yaw_matrix(rate.cumsum(1)), untwisted);   // R_t
-  const at::Tensor start = heading_matrix(untwisted.select(1, 0));                    // H_0
+  const at::Tensor start = start_heading.to(model.scalar_type()).view({b, 1});
+  const at::Tensor rotation = torch::matmul(yaw_matrix(start + rate.cumsum(1)), untwisted);  // R_t
   const at::Tensor feature_root =
-      torch::cat({turned_displacement(root, start.transpose(-1, -2), 1.0 / kRootMotionScale),
+      torch::cat({turned_displacement(root, yaw_matrix(start.select(1, 0)).transpose(-1, -2), 1.0 / kRootMotionScale),
                   matrix_to_rot6d(rotation)},
                  -1);  // (B, T, 9)
   return torch::cat({feature_root.unsqueeze(2), model.narrow(2, 1, model.size(2) - 1).narrow(-1, 0, 9)}, 2);
+}
+
+at::Tensor start_heading(const at::Tensor& features) {
+  check_shape(features, 9, "start_heading");
+  return yaw_angle(heading_matrix(rot6d_to_matrix(features.select(1, 0).select(1, 0).narrow(-1, 3, 6))));
 }
 
 }  // namespace nec::tat

@@ -40,6 +40,17 @@ at::Tensor rest_pose_features(const at::TensorOptions& options) {
   return rest;
 }
 
+// A skeleton's OwO joint embeddings share a large common part (between Bandai's joints, left and right
+// alike, cosine 0.90-0.97): what tells its joints apart is the rest. Centred over the skeleton's real joints
+// and scaled to unit RMS: (B, J, E), mask (B, J) bool -> (B, J, E), zero at padded joints.
+at::Tensor distinct_joint_embeddings(const at::Tensor& embeddings, const at::Tensor& joint_mask) {
+  const at::Tensor real = joint_mask.to(embeddings.scalar_type()).unsqueeze(-1);  // (B, J, 1)
+  const at::Tensor count = real.sum(1, true).clamp_min(1.0);                       // (B, 1, 1)
+  const at::Tensor centred = (embeddings - (embeddings * real).sum(1, true) / count) * real;
+  const at::Tensor mean_square = centred.pow(2).sum({1, 2}, true) / (count * static_cast<double>(embeddings.size(2)));
+  return centred * mean_square.clamp_min(1e-12).rsqrt();
+}
+
 // ResNet1D unit (as T2M-GPT): x + conv1x1(ReLU(dilated conv3(ReLU(x)))). (N, D, T) -> (N, D, T).
 class ResidualUnitImpl : public torch::nn::Module {
  public:
@@ -425,7 +436,9 @@ at::Tensor TokenizerImpl::encode(const at::Tensor& features, const at::Tensor& j
                                                   " joints, more than this zero-pad-rvq model's max_joints = " +
                                                   std::to_string(config_.max_joints));
   }
-  return encoder_->forward(features_to_model_space(features), joint_mask.to(torch::kBool), joint_embeddings);
+  const at::Tensor mask = joint_mask.to(torch::kBool);
+  return encoder_->forward(features_to_model_space(features), mask,
+                           is_nec(config_.kind) ? distinct_joint_embeddings(joint_embeddings, mask) : at::Tensor());
 }
 
 QuantizerOutput TokenizerImpl::quantize(const at::Tensor& latent, const at::Tensor& step_mask) {
@@ -445,7 +458,7 @@ QuantizerOutput TokenizerImpl::quantize(const at::Tensor& latent, const at::Tens
 }
 
 at::Tensor TokenizerImpl::decode(const at::Tensor& quantized, const at::Tensor& joint_mask,
-                                 const at::Tensor& joint_embeddings) {
+                                 const at::Tensor& joint_embeddings, const at::Tensor& start_heading) {
   check_input(quantized.defined() && quantized.dim() == 3 && quantized.size(2) == config_.quantizer.code_dim,
               "quantized must be (B, S, " + std::to_string(config_.quantizer.code_dim) + "), got " +
                   shape_of(quantized));
@@ -463,7 +476,15 @@ at::Tensor TokenizerImpl::decode(const at::Tensor& quantized, const at::Tensor& 
                                                   " joints, more than this zero-pad-rvq model's max_joints = " +
                                                   std::to_string(config_.max_joints));
   }
-  return model_space_to_features(decoder_->forward(quantized, joint_mask.to(torch::kBool), joint_embeddings));
+  if (start_heading.defined()) {
+    check_input(start_heading.dim() == 1 && start_heading.size(0) == b,
+                "start_heading must be (B) = (" + std::to_string(b) + "), got " + shape_of(start_heading));
+  }
+  const at::Tensor mask = joint_mask.to(torch::kBool);
+  const at::Tensor model = decoder_->forward(
+      quantized, mask, is_nec(config_.kind) ? distinct_joint_embeddings(joint_embeddings, mask) : at::Tensor());
+  return model_space_to_features(
+      model, start_heading.defined() ? start_heading.to(model.device()) : torch::zeros({b}, model.options()));
 }
 
 at::Tensor TokenizerImpl::codes_to_latent(const at::Tensor& codes) {
@@ -484,7 +505,7 @@ TokenizerOutput TokenizerImpl::forward(const at::Tensor& features, const at::Ten
   }
   QuantizerOutput q = quantize(latent, step_mask);
   TokenizerOutput out;
-  out.reconstruction = decode(q.quantized, joint_mask, joint_embeddings);
+  out.reconstruction = decode(q.quantized, joint_mask, joint_embeddings, start_heading(features));
   out.codes = q.codes;
   out.commitment_loss = q.commitment_loss;
   out.perplexity = q.perplexity;

@@ -44,5 +44,9 @@ double root_heading(const Features& features, int frame);
 // tokenizer windows: the tokens hold how a motion turns, never where it
 // happens to face. Returns the angle turned (radians about +Y).
 double turn_to_heading(Features& features, double heading);
+// Turns the body about +Y by `angle` (radians) but not its path: every root
+// orientation is premultiplied by the turn and every displacement, in its
+// frame's heading frame, turned back by it, so the root goes where it went.
+void turn_body(Features& features, double angle);
 
 }  // namespace nec

@@ -11,6 +11,7 @@
 // Every change and the reason of a rejection is recorded in the report.
 #pragma once
 
+#include "nec/motion/features.h"
 #include "nec/motion/motion.h"
 
 #include <string>
@@ -74,5 +75,12 @@ Motion resample(const Motion& motion, double fps);
 void transform_clip(Clip& clip, const Quat& rotation, double scale, const Vec3& origin);
 // Undoes preprocess's scale, axes and heading (not the resampling).
 Clip denormalize(const Clip& normalized, const Normalization& normalization);
+
+// The decoder's side of step 6. Tokens hold no start heading (tat/model_space.h): this turns a decoded
+// clip's body (turn_body: not its path) so that frame 0 faces +Z as preprocessing judges it, from the
+// left and right joints, else towards the head (preprocessing tries the direction of travel between the
+// two, which says nothing about the body here). `skeleton` is the normalized one the features are for.
+// Returns the angle turned (radians about +Y); 0, turning nothing, when neither tells.
+double face_forward_at_start(Features& features, const Skeleton& skeleton);
 
 }  // namespace nec

@@ -3,7 +3,7 @@
 //
 //   at::Tensor h = embed_skeletons(*owo->encoder, {skeleton}, {canonical_names}, &vectors)[0];  // (J, D)
 //   at::Tensor codes = encode_clip(*tokenizer, features, h, WindowOptions{64, 16});  // (S, R)
-//   Features back = decode_clip(*tokenizer, codes, features.frame_count, target_h, target_joints, {64, 16});
+//   Features back = decode_clip(*tokenizer, codes, features.frame_count, target_h, target_skeleton, 30, {64, 16});
 //
 // Windows: clips longer than window_frames are cut into windows that overlap
 // by overlap_frames (every window is encoded like a training crop: its frame 0
@@ -48,9 +48,10 @@ struct WindowOptions {
 at::Tensor encode_clip(TokenizerImpl& tokenizer, const Features& features, const at::Tensor& embeddings,
                        const WindowOptions& windows);
 
-// Θ (frame_count, joint_count, 9) decoded from codes (S, R) for a skeleton with
-// `embeddings` (J, D) (undefined for the baseline); start_xz = (0, 0).
+// Θ (frame_count, J, 9) decoded from codes (S, R) for a normalized skeleton with
+// `embeddings` (J, D) (undefined for the baseline), its body facing +Z at
+// frame 0 (face_forward_at_start); start_xz = (0, 0).
 Features decode_clip(TokenizerImpl& tokenizer, const at::Tensor& codes, int frame_count, const at::Tensor& embeddings,
-                     int joint_count, double fps, const WindowOptions& windows);
+                     const Skeleton& skeleton, double fps, const WindowOptions& windows);
 
 }  // namespace nec::tat

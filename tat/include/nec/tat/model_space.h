@@ -1,8 +1,8 @@
 // The tokenizer's view of Θ ("model space"): what its networks read and
 // predict, converted exactly to and from Θ at its boundary.
 //
-//   at::Tensor m = features_to_model_space(x.features);  // (B, T, J, 9) -> (B, T, J, kModelChannels)
-//   at::Tensor back = model_space_to_features(m);        // Θ again (float rounding)
+//   at::Tensor m = features_to_model_space(x.features);           // (B, T, J, 9) -> (B, T, J, kModelChannels)
+//   at::Tensor back = model_space_to_features(m, start_heading(x.features));  // Θ again (float rounding)
 //
 // Θ keeps the root's absolute orientation per frame and its displacement Δ in
 // the heading frame of the root joint. Both hide what transfers across rigs:
@@ -10,16 +10,20 @@
 //    networks learnt to ignore it (a tokenizer trained on Θ gave back the same
 //    root heading for an input turned by 60°);
 //  - direction: the root joint of some rigs faces away from the body (the MANN
-//    dog's by 90°), so Δ's "forward" is another rig's "sideways".
+//    dog's by 90°), so Δ's "forward" is another rig's "sideways";
+//  - where the root faces at all: the networks gave back a root heading near 0
+//    at frame 0 on every rig (the dog's is near 90°: its true start heading
+//    came back as a 100° error, undone in the joints below the root).
 // Model space, per root frame t (h_t = heading of the root, nec::heading_rotation):
 //   [kRootMotionScale · Δx', Δy', kRootMotionScale · Δz', rot6D(R̃_t), kYawRateScale · ω_t]
 // with Δ' = Y(h_0) Δ (the body's heading frame: every window starts with its
-// clip's start heading, where preprocessing made the body face +Z, so h_0 is
-// the rig's own offset from the body), R̃_t = Y(h_0 − h_t) R_t (the root
-// orientation with the turning taken out: its heading stays h_0) and the yaw
-// rate ω_t = h_t − h_{t−1} (radians per frame, wrapped; ω_0 = 0). Other
-// joints: [0, 0, 0, rot6D, 0]. Back: R_t = Y(ω_1 + … + ω_t) R̃_t, then Δ from
-// Δ' with the heading of R_0 = R̃_0. Differentiable.
+// clip's start heading, where preprocessing made the body face +Z), R̃_t =
+// Y(−h_t) R_t (the root orientation without its heading: lean and roll) and
+// the yaw rate ω_t = h_t − h_{t−1} (radians per frame, wrapped; ω_0 = 0).
+// Other joints: [0, 0, 0, rot6D, 0]. The start heading h_0 is not in model
+// space: back to Θ takes it as an argument, R_t = Y(h_0 + ω_1 + … + ω_t) R̃_t
+// and Δ = Y(−h_0) Δ'. Changing h_0 turns the body, not its path.
+// Differentiable.
 #pragma once
 
 #include <ATen/core/Tensor.h>
@@ -39,7 +43,9 @@ constexpr double kYawRateScale = 60.0;     // ω
 
 // features (B, T > 0, J > 0, 9) -> (B, T, J, kModelChannels); std::invalid_argument on other shapes.
 at::Tensor features_to_model_space(const at::Tensor& features);
-// (B, T > 0, J > 0, kModelChannels) -> Θ (B, T, J, 9).
-at::Tensor model_space_to_features(const at::Tensor& model);
+// (B, T > 0, J > 0, kModelChannels) and start_heading (B) radians -> Θ (B, T, J, 9).
+at::Tensor model_space_to_features(const at::Tensor& model, const at::Tensor& start_heading);
+// The root's heading at frame 0 of features (B, T > 0, J > 0, 9): (B) radians about +Y.
+at::Tensor start_heading(const at::Tensor& features);
 
 }  // namespace nec::tat

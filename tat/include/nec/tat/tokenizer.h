@@ -24,8 +24,8 @@
 //
 // Both kinds read and predict Θ in model space (model_space.h: the root
 // displacement in the body's heading frame, turning as a yaw rate, both
-// scaled up); encode converts Θ there, decode converts back, so their
-// features in and out are Θ.
+// scaled up, the root orientation without its heading); encode converts Θ
+// there, decode converts back, so their features in and out are Θ.
 //
 // Details shared by the kinds: temporal blocks are Conv1d(k4, s2, p1) or
 // nearest x2 + Conv1d(k3), each followed by one ResNet1D unit (ReLU, dilated
@@ -93,11 +93,14 @@ class TokenizerImpl : public torch::nn::Module {
   // latent (B, S, C), step_mask (B, S) bool or undefined. The output's
   // quantized is (B, S, C) and its codes (B, S, R).
   QuantizerOutput quantize(const at::Tensor& latent, const at::Tensor& step_mask = {});
-  // quantized (B, S, C) -> features (B, S * r, J, 9) for the skeletons of joint_mask / joint_embeddings.
-  at::Tensor decode(const at::Tensor& quantized, const at::Tensor& joint_mask, const at::Tensor& joint_embeddings);
+  // quantized (B, S, C) -> features (B, S * r, J, 9) for the skeletons of joint_mask / joint_embeddings,
+  // whose roots face start_heading (B radians about +Y; undefined: 0) at frame 0. The tokens hold no start
+  // heading: it turns the body, not its path (model_space.h); see face_forward_at_start.
+  at::Tensor decode(const at::Tensor& quantized, const at::Tensor& joint_mask, const at::Tensor& joint_embeddings,
+                    const at::Tensor& start_heading = {});
   // codes (B, S, R) -> quantized latent (B, S, C).
   at::Tensor codes_to_latent(const at::Tensor& codes);
-  // encode -> quantize (steps whose frames are all padding are masked) -> decode.
+  // encode -> quantize (steps whose frames are all padding are masked) -> decode with the input's start heading.
   TokenizerOutput forward(const at::Tensor& features, const at::Tensor& joint_mask, const at::Tensor& frame_mask,
                           const at::Tensor& joint_embeddings);
 
