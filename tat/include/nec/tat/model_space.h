@@ -12,8 +12,8 @@
 //  - direction: the root joint of some rigs faces away from the body (the MANN
 //    dog's by 90°), so Δ's "forward" is another rig's "sideways";
 //  - where the root faces at all: the networks gave back a root heading near 0
-//    at frame 0 on every rig (the dog's is near 90°: its true start heading
-//    came back as a 100° error, undone in the joints below the root).
+//    at frame 0 on every rig (the dog's is 76–126°: it came back 86° off on
+//    average, undone in the joints below the root).
 // Model space, per root frame t (h_t = heading of the root, nec::heading_rotation):
 //   [kRootMotionScale · Δx', Δy', kRootMotionScale · Δz', rot6D(R̃_t), kYawRateScale · ω_t]
 // with Δ' = Y(h_0) Δ (the body's heading frame: every window starts with its
