@@ -371,9 +371,12 @@ double face_forward_at_start(Features& features, const Skeleton& skeleton) {
                                 " joints, the skeleton " + std::to_string(skeleton.joint_count()));
   }
   if (features.frame_count == 0) return 0.0;
-  Features first = features;
+  Features first;  // frame 0 alone: its pose is all the rule reads
   first.frame_count = 1;
-  first.data.resize(static_cast<size_t>(features.joint_count) * kFeatureSize);
+  first.joint_count = features.joint_count;
+  first.fps = features.fps;
+  first.start_xz = features.start_xz;
+  first.data.assign(features.data.begin(), features.data.begin() + features.joint_count * kFeatureSize);
   const Pose pose = forward_kinematics(skeleton, decode_features(skeleton, first));
   Vec3 forward;
   if (!forward_from_sides(skeleton, pose, forward) && !forward_from_head(skeleton, pose, forward)) return 0.0;
