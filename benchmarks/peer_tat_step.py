@@ -183,6 +183,14 @@ def key_bias(joint_mask):
     return bias.view(keep.size(0), 1, 1, 1, keep.size(1))
 
 
+def decoder_attention_bias(joint_mask):
+    """(B, J) bool -> (B, 1, 1, 1 + J, 1 + J): the joints read every real token, the virtual joint only itself."""
+    n = joint_mask.size(1) + 1
+    bias = key_bias(joint_mask).expand(joint_mask.size(0), 1, 1, n, n).clone()
+    bias[:, :, :, 0, 1:] = MASKED_SCORE
+    return bias
+
+
 class NecEncoder(nn.Module):
     def __init__(self, c):
         super().__init__()
@@ -233,6 +241,7 @@ class NecDecoder(nn.Module):
             self.temporal.append(UpBlock(d))
         self.attention_layers = c["attention_layers"]
         self.output = nn.Linear(d, MODEL_CHANNELS)
+        self.path = nn.Linear(d, 3)
 
     def forward(self, quantized, joint_mask, joint_embeddings):
         """(B, S, C) -> model space (B, S r, J, MODEL_CHANNELS), zero at padded joints."""
@@ -241,16 +250,19 @@ class NecDecoder(nn.Module):
         joint_features = self.joint_hidden(torch.relu(
             self.joint_from_latent(quantized).unsqueeze(2) + self.joint_from_embedding(joint_embeddings).unsqueeze(1)))
         tokens = torch.cat([virtual_joint, joint_features], 2)
-        bias = key_bias(joint_mask)
-        blocks = len(self.temporal)
-        for block in range(blocks):
+        bias = decoder_attention_bias(joint_mask)
+        for block in range(len(self.temporal)):
             for layer in range(self.attention_layers):
                 tokens = self.spatial[block * self.attention_layers + layer](tokens, bias)
-            if block + 1 == blocks:
-                tokens = tokens.narrow(2, 1, joints)
             tokens = per_token(self.temporal[block], tokens)
-        out = self.output(tokens) + rest_pose_features()
-        return out * joint_mask.view(joint_mask.size(0), 1, joints, 1).to(out.dtype)
+        out = self.output(tokens.narrow(2, 1, joints)) + rest_pose_features()
+        # The root's path (Δx', Δz', yaw rate) from the virtual joint; Δy' and R̃ stay the root joint's.
+        path = self.path(tokens.select(2, 0))
+        root = out.select(2, 0)
+        root = torch.cat([path.narrow(-1, 0, 1), root.narrow(-1, 1, 1), path.narrow(-1, 1, 1), root.narrow(-1, 3, 6),
+                          path.narrow(-1, 2, 1)], -1)
+        joined = torch.cat([root.unsqueeze(2), out.narrow(2, 1, joints - 1)], 2)
+        return joined * joint_mask.view(joint_mask.size(0), 1, joints, 1).to(joined.dtype)
 
 
 # ---- Residual quantizer (quantizer.cpp) ----

@@ -254,6 +254,37 @@ TEST(TatTokenizer, NecReadsWhatTellsASkeletonsJointsApart) {
   }
 }
 
+TEST(TatTokenizer, NecDecodesTheSamePathOnEverySkeleton) {
+  // The root's horizontal path comes from the tokens alone: one latent decoded onto a 5-joint and an 11-joint
+  // skeleton moves both roots alike (Δx, Δz in body sizes), while the poses and the root's height differ.
+  torch::manual_seed(8);
+  std::mt19937 rng(8);
+  const RandomBatch pair = random_batch(rng, {5, 11}, 16);
+  for (TokenizerKind kind : {TokenizerKind::NecRvq, TokenizerKind::NecVq}) {
+    tat::Tokenizer model(small_config(kind));
+    model->forward(pair.batch.features, pair.batch.joint_mask, pair.batch.frame_mask, pair.embeddings);
+    model->eval();
+    torch::NoGradGuard no_grad;
+    const at::Tensor latent = model->encode(pair.batch.features.narrow(0, 0, 1).narrow(2, 0, 5),
+                                            pair.batch.joint_mask.narrow(0, 0, 1).narrow(1, 0, 5),
+                                            pair.embeddings.narrow(0, 0, 1).narrow(1, 0, 5));
+    const at::Tensor quantized = model->quantize(latent).quantized;
+    const auto decode_onto = [&](int64_t item, int64_t joints) {
+      return model->decode(quantized, pair.batch.joint_mask.narrow(0, item, 1).narrow(1, 0, joints),
+                           pair.embeddings.narrow(0, item, 1).narrow(1, 0, joints).contiguous(), torch::zeros({1}));
+    };
+    const at::Tensor small = decode_onto(0, 5), large = decode_onto(1, 11);
+    const at::Tensor small_root = small.select(2, 0), large_root = large.select(2, 0);
+    for (int64_t channel : {0, 2}) {
+      EXPECT_LT((small_root.select(-1, channel) - large_root.select(-1, channel)).abs().max().item<double>(), 1e-6)
+          << tat::to_string(kind) << " channel " << channel;
+    }
+    EXPECT_GT(small_root.select(-1, 0).abs().max().item<double>(), 1e-4) << tat::to_string(kind);
+    EXPECT_GT((small_root.select(-1, 1) - large_root.select(-1, 1)).abs().max().item<double>(), 1e-4);
+    EXPECT_GT((small.narrow(2, 1, 4) - large.narrow(2, 1, 4)).abs().max().item<double>(), 1e-3);
+  }
+}
+
 TEST(TatTokenizer, DecodingTheCodesGivesTheReconstruction) {
   torch::manual_seed(5);
   std::mt19937 rng(5);

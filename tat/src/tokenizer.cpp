@@ -152,6 +152,16 @@ at::Tensor key_bias(const at::Tensor& joint_mask, const at::TensorOptions& optio
   return bias.view({keep.size(0), 1, 1, 1, keep.size(1)});
 }
 
+// (B, J) joint mask -> (B, 1, 1, 1 + J, 1 + J) additive bias for the decoder's attention: the joints read
+// every real token, the virtual joint (token 0) only itself. What the decoder reads from the virtual joint, the
+// root's path, then comes from the tokens alone and is the same on every target skeleton.
+at::Tensor decoder_attention_bias(const at::Tensor& joint_mask, const at::TensorOptions& options) {
+  const int64_t b = joint_mask.size(0), n = joint_mask.size(1) + 1;
+  at::Tensor bias = key_bias(joint_mask, options).expand({b, 1, 1, n, n}).clone();
+  bias.narrow(3, 0, 1).narrow(4, 1, n - 1).fill_(kMaskedScore);
+  return bias;
+}
+
 }  // namespace
 
 namespace detail {
@@ -234,7 +244,10 @@ class NecEncoderImpl : public detail::EncoderImpl {
 };
 
 // NEC decoder: z_t as the virtual joint, MLP([z_t ‖ h_j]) per joint, then per
-// block spatial attention and a temporal upsampling block per token, linear to kModelChannels.
+// block spatial attention and a temporal upsampling block per token, linear to kModelChannels per joint. The
+// root's path in model space (Δx', Δz', yaw rate) is read from the virtual joint, which attends to itself
+// only: the same tokens give the same path, in body sizes, on every skeleton (read from the root joint, which
+// attends to the target's joints, a straight walk decoded onto the MANN dog turned by 64°, onto itself by 21°).
 class NecDecoderImpl : public detail::DecoderImpl {
  public:
   explicit NecDecoderImpl(const TatConfig& config) {
@@ -255,6 +268,7 @@ class NecDecoderImpl : public detail::DecoderImpl {
     }
     attention_layers_ = config.attention_layers;
     output_ = register_module("output", torch::nn::Linear(d, kModelChannels));
+    path_ = register_module("path", torch::nn::Linear(d, 3));
   }
 
   at::Tensor forward(const at::Tensor& quantized, const at::Tensor& joint_mask,
@@ -264,24 +278,28 @@ class NecDecoderImpl : public detail::DecoderImpl {
     const at::Tensor joint_features = joint_hidden_(torch::relu(
         joint_from_latent_(quantized).unsqueeze(2) + joint_from_embedding_(joint_embeddings).unsqueeze(1)));
     at::Tensor tokens = torch::cat({virtual_joint, joint_features}, 2);  // (B, S, 1 + J, D)
-    const at::Tensor bias = key_bias(joint_mask, tokens.options());
+    const at::Tensor bias = decoder_attention_bias(joint_mask, tokens.options());
     const size_t blocks = temporal_->size();
     for (size_t block = 0; block < blocks; ++block) {
       for (int64_t layer = 0; layer < attention_layers_; ++layer) {
         tokens = spatial_->ptr<SpatialAttentionImpl>(block * attention_layers_ + layer)->forward(tokens, bias);
       }
-      // After the last attention nothing reads the virtual joint: drop it.
-      if (block + 1 == blocks) tokens = tokens.narrow(2, 1, joints);
       tokens = per_token(temporal_->ptr<UpBlockImpl>(block), tokens);
     }
-    const at::Tensor out = output_(tokens) + rest_pose_features(tokens.options());  // (B, T, J, kModelChannels)
-    return out * joint_mask.view({joint_mask.size(0), 1, joints, 1}).to(out.scalar_type());
+    const at::Tensor out = output_(tokens.narrow(2, 1, joints)) + rest_pose_features(tokens.options());
+    const at::Tensor path = path_(tokens.select(2, 0));  // (B, T, 3): Δx', Δz', yaw rate
+    const at::Tensor root = out.select(2, 0);           // (B, T, kModelChannels): Δy' and R̃ stay the root's
+    const at::Tensor root_with_path = torch::cat({path.narrow(-1, 0, 1), root.narrow(-1, 1, 1), path.narrow(-1, 1, 1),
+                                                  root.narrow(-1, 3, 6), path.narrow(-1, 2, 1)},
+                                                 -1);
+    const at::Tensor joined = torch::cat({root_with_path.unsqueeze(2), out.narrow(2, 1, joints - 1)}, 2);
+    return joined * joint_mask.view({joint_mask.size(0), 1, joints, 1}).to(joined.scalar_type());
   }
 
  private:
   int64_t attention_layers_ = 1;
   torch::nn::Linear virtual_from_latent_{nullptr}, joint_from_latent_{nullptr}, joint_from_embedding_{nullptr},
-      joint_hidden_{nullptr}, output_{nullptr};
+      joint_hidden_{nullptr}, output_{nullptr}, path_{nullptr};
   torch::nn::ModuleList spatial_{nullptr}, temporal_{nullptr};
 };
 
