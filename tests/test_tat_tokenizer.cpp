@@ -100,6 +100,15 @@ RandomBatch random_batch(std::mt19937& rng, const std::vector<int>& joint_counts
   return out;
 }
 
+// A model of `kind` in eval mode, its codebooks seeded by a training-mode forward pass on x.
+tat::Tokenizer seeded_model(TokenizerKind kind, const RandomBatch& x) {
+  tat::Tokenizer model(small_config(kind));
+  model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask,
+                 kind == TokenizerKind::ZeroPadRvq ? at::Tensor() : x.embeddings);
+  model->eval();
+  return model;
+}
+
 TEST(TatTokenizer, KindNamesRoundTrip) {
   for (TokenizerKind kind : kAllKinds) EXPECT_EQ(tat::tokenizer_kind_from_string(tat::to_string(kind)), kind);
   EXPECT_EQ(tat::to_string(TokenizerKind::ZeroPadRvq), "zero-pad-rvq");
@@ -194,12 +203,8 @@ TEST(TatTokenizer, MaskingInvariance) {
   std::mt19937 rng(4);
   const RandomBatch pair = random_batch(rng, {5, 11}, 16);
   for (TokenizerKind kind : kAllKinds) {
-    tat::Tokenizer model(small_config(kind));
-    // Seed the codebooks with a training step, then evaluate.
+    tat::Tokenizer model = seeded_model(kind, pair);
     const bool nec = kind != TokenizerKind::ZeroPadRvq;
-    model->forward(pair.batch.features, pair.batch.joint_mask, pair.batch.frame_mask,
-                   nec ? pair.embeddings : at::Tensor());
-    model->eval();
     torch::NoGradGuard no_grad;
 
     const at::Tensor alone_features = pair.batch.features.narrow(0, 0, 1).narrow(2, 0, 5).contiguous();
@@ -234,9 +239,7 @@ TEST(TatTokenizer, NecReadsWhatTellsASkeletonsJointsApart) {
   std::mt19937 rng(6);
   const RandomBatch pair = random_batch(rng, {5, 11}, 16);
   for (TokenizerKind kind : {TokenizerKind::NecRvq, TokenizerKind::NecVq}) {
-    tat::Tokenizer model(small_config(kind));
-    model->forward(pair.batch.features, pair.batch.joint_mask, pair.batch.frame_mask, pair.embeddings);
-    model->eval();
+    tat::Tokenizer model = seeded_model(kind, pair);
     torch::NoGradGuard no_grad;
     const auto reconstruct = [&](const at::Tensor& embeddings) {
       return model->forward(pair.batch.features, pair.batch.joint_mask, pair.batch.frame_mask, embeddings)
@@ -261,9 +264,7 @@ TEST(TatTokenizer, NecDecodesTheSamePathOnEverySkeleton) {
   std::mt19937 rng(8);
   const RandomBatch pair = random_batch(rng, {5, 11}, 16);
   for (TokenizerKind kind : {TokenizerKind::NecRvq, TokenizerKind::NecVq}) {
-    tat::Tokenizer model(small_config(kind));
-    model->forward(pair.batch.features, pair.batch.joint_mask, pair.batch.frame_mask, pair.embeddings);
-    model->eval();
+    tat::Tokenizer model = seeded_model(kind, pair);
     torch::NoGradGuard no_grad;
     const at::Tensor latent = model->encode(pair.batch.features.narrow(0, 0, 1).narrow(2, 0, 5),
                                             pair.batch.joint_mask.narrow(0, 0, 1).narrow(1, 0, 5),
@@ -290,10 +291,8 @@ TEST(TatTokenizer, DecodingTheCodesGivesTheReconstruction) {
   std::mt19937 rng(5);
   const RandomBatch x = random_batch(rng, {6, 9}, 16);
   for (TokenizerKind kind : kAllKinds) {
-    tat::Tokenizer model(small_config(kind));
+    tat::Tokenizer model = seeded_model(kind, x);
     const at::Tensor embeddings = kind == TokenizerKind::ZeroPadRvq ? at::Tensor() : x.embeddings;
-    model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, embeddings);
-    model->eval();
     torch::NoGradGuard no_grad;
     const TokenizerOutput out = model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, embeddings);
     const at::Tensor latent = model->codes_to_latent(out.codes);
