@@ -247,7 +247,8 @@ class NecEncoderImpl : public detail::EncoderImpl {
 // block spatial attention and a temporal upsampling block per token, linear to kModelChannels per joint. The
 // root's path in model space (Δx', Δz', yaw rate) is read from the virtual joint, which attends to itself
 // only: the same tokens give the same path, in body sizes, on every skeleton (read from the root joint, which
-// attends to the target's joints, a straight walk decoded onto the MANN dog turned by 64°, onto itself by 21°).
+// attends to the target's joints, one straight walk's tokens turned −60° on the MANN dog, −28° on the walk's own
+// skeleton: README, Measured).
 class NecDecoderImpl : public detail::DecoderImpl {
  public:
   explicit NecDecoderImpl(const TatConfig& config) {
