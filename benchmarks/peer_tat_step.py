@@ -256,7 +256,7 @@ class NecDecoder(nn.Module):
                 tokens = self.spatial[block * self.attention_layers + layer](tokens, bias)
             tokens = per_token(self.temporal[block], tokens)
         out = self.output(tokens.narrow(2, 1, joints)) + rest_pose_features()
-        # The root's path (Δx', Δz', yaw rate) from the virtual joint; Δy' and R̃ stay the root joint's.
+        # The root's path (Δx', Δz', yaw rate) from the virtual joint; height and R̃ stay the root joint's.
         path = self.path(tokens.select(2, 0))
         root = out.select(2, 0)
         root = torch.cat([path.narrow(-1, 0, 1), root.narrow(-1, 1, 1), path.narrow(-1, 1, 1), root.narrow(-1, 3, 6),
@@ -360,15 +360,27 @@ def turned_displacement(root, turn, scale):
     return delta * torch.tensor([scale, 1.0, scale], dtype=root.dtype)
 
 
+def with_heights(root):
+    """Root rows with Θ's Δy (frame 0: the height) in channel 1 -> the height of every frame there."""
+    return torch.cat([root[..., :1], root[..., 1:2].cumsum(1), root[..., 2:]], -1)
+
+
+def with_height_steps(root):
+    """The inverse of with_heights."""
+    height = root[..., 1:2]
+    return torch.cat([root[..., :1], torch.cat([height[:, :1], height[:, 1:] - height[:, :-1]], 1), root[..., 2:]], -1)
+
+
 def features_to_model_space(features):
-    """(B, T, J, 9) -> (B, T, J, MODEL_CHANNELS): body-frame Δ, root orientation without its heading, yaw rate."""
+    """(B, T, J, 9) -> (B, T, J, MODEL_CHANNELS): body-frame Δ, root height, root orientation without its heading,
+    yaw rate."""
     root = features.select(2, 0)
     rotation = rot6d_to_matrix(root.narrow(-1, 3, 6))
     heading = heading_matrix(rotation)
     untwisted = torch.matmul(heading.transpose(-1, -2), rotation)
     step = torch.matmul(heading[:, :-1].transpose(-1, -2), heading[:, 1:])
     rate = nn.functional.pad(torch.atan2(step[..., 0, 2], step[..., 0, 0]), (1, 0))  # frame 0 does not turn
-    model_root = torch.cat([turned_displacement(root, heading.select(1, 0), ROOT_MOTION_SCALE),
+    model_root = torch.cat([with_heights(turned_displacement(root, heading.select(1, 0), ROOT_MOTION_SCALE)),
                             matrix_to_rot6d(untwisted), (rate * YAW_RATE_SCALE).unsqueeze(-1)], -1)
     others = nn.functional.pad(features.narrow(2, 1, features.size(2) - 1), (0, 1))
     return torch.cat([model_root.unsqueeze(2), others], 2)
@@ -381,7 +393,7 @@ def model_space_to_features(model, start_heading):
     rate = nn.functional.pad(root[:, 1:, 9] / YAW_RATE_SCALE, (1, 0))
     start = start_heading.to(model.dtype).view(-1, 1)
     rotation = torch.matmul(yaw_matrix(start + rate.cumsum(1)), untwisted)
-    feature_root = torch.cat([turned_displacement(root, yaw_matrix(start[:, 0]).transpose(-1, -2),
+    feature_root = torch.cat([turned_displacement(with_height_steps(root), yaw_matrix(start[:, 0]).transpose(-1, -2),
                                                   1.0 / ROOT_MOTION_SCALE), matrix_to_rot6d(rotation)], -1)
     return torch.cat([feature_root.unsqueeze(2), model.narrow(2, 1, model.size(2) - 1).narrow(-1, 0, 9)], 2)
 

@@ -144,10 +144,11 @@ TEST(TatLoss, EachTermRespondsToItsOwnChannels) {
   EXPECT_GT(l.root, 0.0);
   EXPECT_GT(l.position, 0.0);
   EXPECT_GT(l.velocity, 0.0);
-  // The root term averages 4 channels (Δ' x, y, z and the yaw rate) over 12 + 9 real frames. Δy alone:
+  // The root term averages 4 channels (Δ'x, height, Δ'z and the yaw rate) over 12 + 9 real frames. Δy alone
+  // lifts the root's height in frames 5 to 11 of clip 0:
   p = f.batch.features.clone();
   p[0][frame][0][1].add_(0.2);
-  EXPECT_NEAR(loss_of(p, f.batch).root, 0.2 / 4.0 / 21.0, 1e-6);
+  EXPECT_NEAR(loss_of(p, f.batch).root, 0.2 * 7.0 / 4.0 / 21.0, 1e-6);
   // Horizontal Δ counts at the networks' scale, turned into the body's frame (its length kept).
   p = f.batch.features.clone();
   p[0][frame][0][0].add_(0.2);

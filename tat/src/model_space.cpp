@@ -40,6 +40,19 @@ at::Tensor turned_displacement(const at::Tensor& root, const at::Tensor& turn, d
   return delta * factor;
 }
 
+// Root rows (B, T, C) with Θ's Δy (frame 0: the height) in channel 1 -> the same with the height of every frame.
+at::Tensor with_heights(const at::Tensor& root) {
+  return torch::cat({root.narrow(-1, 0, 1), root.narrow(-1, 1, 1).cumsum(1), root.narrow(-1, 2, root.size(-1) - 2)}, -1);
+}
+
+// The inverse: root rows with the height of every frame in channel 1 -> Θ's Δy (frame 0: the height).
+at::Tensor with_height_steps(const at::Tensor& root) {
+  const at::Tensor height = root.narrow(-1, 1, 1);
+  const int64_t later = root.size(1) - 1;
+  const at::Tensor step = torch::cat({height.narrow(1, 0, 1), height.narrow(1, 1, later) - height.narrow(1, 0, later)}, 1);
+  return torch::cat({root.narrow(-1, 0, 1), step, root.narrow(-1, 2, root.size(-1) - 2)}, -1);
+}
+
 // Yaw rates (B, T - 1) of frames 1.. -> (B, T) with frame 0's, which never turns, 0.
 at::Tensor after_a_still_first_frame(const at::Tensor& later_rates) {
   return torch::constant_pad_nd(later_rates, {1, 0});
@@ -57,7 +70,7 @@ at::Tensor features_to_model_space(const at::Tensor& features) {
   const int64_t later = features.size(1) - 1;
   const at::Tensor step = torch::matmul(heading.narrow(1, 0, later).transpose(-1, -2), heading.narrow(1, 1, later));
   const at::Tensor rate = after_a_still_first_frame(yaw_angle(step));  // (B, T)
-  const at::Tensor model_root = torch::cat({turned_displacement(root, heading.select(1, 0), kRootMotionScale),
+  const at::Tensor model_root = torch::cat({with_heights(turned_displacement(root, heading.select(1, 0), kRootMotionScale)),
                                             matrix_to_rot6d(untwisted), (rate * kYawRateScale).unsqueeze(-1)},
                                            -1);  // (B, T, 10)
   const at::Tensor others = torch::constant_pad_nd(features.narrow(2, 1, features.size(2) - 1), {0, 1});
@@ -78,7 +91,8 @@ at::Tensor model_space_to_features(const at::Tensor& model, const at::Tensor& st
   const at::Tensor start = start_heading.to(model.scalar_type()).view({b, 1});
   const at::Tensor rotation = torch::matmul(yaw_matrix(start + rate.cumsum(1)), untwisted);  // R_t
   const at::Tensor feature_root =
-      torch::cat({turned_displacement(root, yaw_matrix(start.select(1, 0)).transpose(-1, -2), 1.0 / kRootMotionScale),
+      torch::cat({turned_displacement(with_height_steps(root), yaw_matrix(start.select(1, 0)).transpose(-1, -2),
+                                      1.0 / kRootMotionScale),
                   matrix_to_rot6d(rotation)},
                  -1);  // (B, T, 9)
   return torch::cat({feature_root.unsqueeze(2), model.narrow(2, 1, model.size(2) - 1).narrow(-1, 0, 9)}, 2);

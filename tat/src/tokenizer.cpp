@@ -289,7 +289,7 @@ class NecDecoderImpl : public detail::DecoderImpl {
     }
     const at::Tensor out = output_(tokens.narrow(2, 1, joints)) + rest_pose_features(tokens.options());
     const at::Tensor path = path_(tokens.select(2, 0));  // (B, T, 3): Δx', Δz', yaw rate
-    const at::Tensor root = out.select(2, 0);           // (B, T, kModelChannels): Δy' and R̃ stay the root's
+    const at::Tensor root = out.select(2, 0);           // (B, T, kModelChannels): height and R̃ stay the root's
     const at::Tensor root_with_path = torch::cat({path.narrow(-1, 0, 1), root.narrow(-1, 1, 1), path.narrow(-1, 1, 1),
                                                   root.narrow(-1, 3, 6), path.narrow(-1, 2, 1)},
                                                  -1);

@@ -29,13 +29,14 @@ class Optimizer;
 namespace nec::tat {
 
 constexpr const char* kTatCheckpointFormat = "nec-tat";
-constexpr int kTatCheckpointVersion = 8;  // 2: the encoder scales the root displacement up; 3: the decoder
+constexpr int kTatCheckpointVersion = 9;  // 2: the encoder scales the root displacement up; 3: the decoder
                                            // predicts it scaled; 4: windows start with the clip's start
                                            // heading (turn_to_heading, align_window_headings); 5: the
                                            // virtual joint starts from the root joint's input; 6: the
                                            // networks see Θ in model space (model_space.h); 7: the
                                            // joint embeddings are centred over the skeleton; 8: the NEC
-                                           // decoder reads the root's path from the virtual joint
+                                           // decoder reads the root's path from the virtual joint; 9: model
+                                           // space holds the root's height per frame, not Θ's Δy
 
 struct TatCheckpointInfo {
   int64_t window_frames = 64;   // training window T, e.g. 64; inference uses windows of this size

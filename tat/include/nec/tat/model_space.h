@@ -13,10 +13,14 @@
 //    dog's by 90°), so Δ's "forward" is another rig's "sideways";
 //  - where the root faces at all: the networks gave back a root heading near 0
 //    at frame 0 on every rig (the dog's is 76–126°: it came back 86° off on
-//    average, undone in the joints below the root).
+//    average, undone in the joints below the root);
+//  - height: Θ's Δy holds the root height at frame 0 and steps after it; the
+//    decoder smeared that spike over frames 0 and 1, and every decoded clip
+//    started with its body sunk into the floor (a Bandai walk's hips at 67 cm
+//    in frame 0, 94 cm from frame 1 on).
 // Model space, per root frame t (h_t = heading of the root, nec::heading_rotation):
-//   [kRootMotionScale · Δx', Δy', kRootMotionScale · Δz', rot6D(R̃_t), kYawRateScale · ω_t]
-// with Δ' = Y(h_0) Δ (the body's heading frame: every window starts with its
+//   [kRootMotionScale · Δx', y_t, kRootMotionScale · Δz', rot6D(R̃_t), kYawRateScale · ω_t]
+// with y_t the root's height (Θ's Δy summed over frames 0..t), Δ' = Y(h_0) Δ (the body's heading frame: every window starts with its
 // clip's start heading, where preprocessing made the body face +Z), R̃_t =
 // Y(−h_t) R_t (the root orientation without its heading: lean and roll) and
 // the yaw rate ω_t = h_t − h_{t−1} (radians per frame, wrapped; ω_0 = 0).
