@@ -39,6 +39,7 @@ json measurements_json(const MotionMeasurements& m) {
           {"feet", m.gait.feet},
           {"contact_fraction", m.gait.contact_fraction},
           {"touchdowns_per_second", m.gait.touchdowns_per_second},
+          {"foot_skate", number(m.gait.skate)},
           {"bone_length_change", m.bone_length_change}};
 }
 
@@ -49,8 +50,8 @@ int run_eval_transfer(int argc, char** argv) {
                   "Compare transferred clips with their sources (pairs SRC.bvh OUT.bvh, e.g. from `nec transfer`), each\n"
                   "in its own body sizes (skeleton diameters): root speed and their ratio (1 = as many body sizes per\n"
                   "second), heading change, direction of travel against the facing (0 = forward), feet that plant\n"
-                  "(leaf joints near the floor and nearly still) with touchdowns per second, and the largest bone-length\n"
-                  "change of the output. Both files are resampled to 30 fps with +Y up before measuring.");
+                  "(leaf joints near the floor and nearly still) with touchdowns per second, foot skate (how fast leaf\n"
+                  "joints near the floor move), and the largest bone-length change of the output. Both files are resampled to 30 fps with +Y up before measuring.");
   cli.positional("PAIRS", "SRC.bvh OUT.bvh [SRC.bvh OUT.bvh ...]", true, true);
   cli.option("--up", "AXIS", "auto", "up axis of the files: auto, y or z");
   cli.option("--json", "OUT.json", "", "also write the results as JSON");
@@ -64,8 +65,8 @@ int run_eval_transfer(int argc, char** argv) {
   json results = json::array();
   std::string table =
       "| source | output | speed src / out (sizes/s) | ratio | heading change src / out (deg) | direction src / out (deg) "
-      "| feet src / out | touchdowns/s src / out | bone change |\n"
-      "|---|---|---|---|---|---|---|---|---|\n";
+      "| feet src / out | touchdowns/s src / out | foot skate src / out (sizes/s) | bone change |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < files.size(); i += 2) {
     const TransferCheck c = check_transfer(prepared(files[i], up), prepared(files[i + 1], up));
     results.push_back({{"source", files[i]},
@@ -75,11 +76,12 @@ int run_eval_transfer(int argc, char** argv) {
                        {"direction_difference_deg", number(c.direction_difference)},
                        {"source_measurements", measurements_json(c.source)},
                        {"output_measurements", measurements_json(c.output)}});
-    table += fmt::format("| {} | {} | {:.3f} / {:.3f} | {} | {:.1f} / {:.1f} | {} / {} | {} / {} | {:.2f} / {:.2f} | {:.2g} |\n",
+    table += fmt::format("| {} | {} | {:.3f} / {:.3f} | {} | {:.1f} / {:.1f} | {} / {} | {} / {} | {:.2f} / {:.2f} | {} / {} | {:.2g} |\n",
                          files[i], files[i + 1], c.source.speed, c.output.speed, cell(c.speed_ratio, "{:.2f}"),
                          c.source.heading_change, c.output.heading_change, cell(c.source.travel_direction, "{:.0f}"),
                          cell(c.output.travel_direction, "{:.0f}"), c.source.gait.feet, c.output.gait.feet,
                          c.source.gait.touchdowns_per_second, c.output.gait.touchdowns_per_second,
+                         cell(c.source.gait.skate, "{:.2f}"), cell(c.output.gait.skate, "{:.2f}"),
                          c.output.bone_length_change);
   }
   fmt::print("{}", table);

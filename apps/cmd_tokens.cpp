@@ -5,6 +5,7 @@
 
 #include "nec/motion/bvh.h"
 #include "nec/motion/error.h"
+#include "nec/motion/foot_lock.h"
 #include "nec/tat/tokens.h"
 
 #include <fmt/format.h>
@@ -41,10 +42,10 @@ tat::TokenFile encode_file(TokenizerSession& session, const std::string& path, U
   return tokens;
 }
 
-// Decodes tokens onto the skeleton of `target_path` and writes OUT.bvh in that
-// file's units, up axis, joint names, channels and Euler orders.
-void decode_onto(TokenizerSession& session, const tat::TokenFile& tokens, const std::string& target_path, UpAxis up,
-                 const std::string& out_path) {
+// Decodes tokens onto the skeleton of `target_path`, pins the feet it puts down unless `free_feet`, and
+// writes OUT.bvh in that file's units, up axis, joint names, channels and Euler orders.
+FootLockReport decode_onto(TokenizerSession& session, const tat::TokenFile& tokens, const std::string& target_path,
+                           UpAxis up, bool free_feet, const std::string& out_path) {
   const tat::TatConfig& config = session.model.tokenizer->config();
   if (tokens.layers > config.quantizer.layers || tokens.codebook_size != config.quantizer.codebook_size ||
       tokens.downsampling != config.downsampling()) {
@@ -63,8 +64,22 @@ void decode_onto(TokenizerSession& session, const tat::TokenFile& tokens, const 
       tat::decode_clip(*session.model.tokenizer, codes, tokens.frames, session.embed(skeleton, target.canonical_names),
                        skeleton, tokens.fps, session.windows);
   Clip out{skeleton, decode_features(skeleton, features), {}};
+  FootLockReport feet;
+  if (!free_feet) feet = lock_feet(out.skeleton, out.motion);
   out = denormalize(out, with_heading(target.normalization, tokens.heading_degrees));
   write_bvh(out_path, out.skeleton, out.motion);
+  return feet;
+}
+
+void declare_feet_option(CommandLine& cli) {
+  cli.flag("--free-feet", "leave the feet as decoded (default: pin the feet the motion puts down and bend their legs\n"
+                          "to reach the pins, as decoded feet slide)");
+}
+
+std::string feet_summary(const FootLockReport& feet) {
+  if (feet.feet == 0) return "";
+  return fmt::format("; {} plants of {} feet pinned (they slid {:.2f} body sizes/s; largest miss {:.3f} sizes)",
+                     feet.planted_spans, feet.feet, feet.mean_slide, feet.max_miss);
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -101,15 +116,18 @@ int run_decode(int argc, char** argv) {
              true);
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--up", "AXIS", "auto", "up axis of the skeleton file: auto, y or z");
+  declare_feet_option(cli);
   declare_model_options(cli);
   cli.example("nec decode walk.tokens.json --skeleton dragon.bvh --model runs/tat -o dragon_walk.bvh");
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
   TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const tat::TokenFile tokens = tat::read_tokens(cli.positional_value("TOKENS.json"));
-  decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"), cli.value("-o"));
-  fmt::print("wrote {}: {} frames on the skeleton of {} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
-             cli.value("--skeleton"), seconds_since(start));
+  const FootLockReport feet =
+      decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"), cli.is_set("--free-feet"),
+                  cli.value("-o"));
+  fmt::print("wrote {}: {} frames on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
+             cli.value("--skeleton"), feet_summary(feet), seconds_since(start));
   return 0;
 }
 
@@ -123,16 +141,18 @@ int run_transfer(int argc, char** argv) {
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--up", "AXIS", "auto", "up axis of both input files: auto, y or z");
   cli.option("--tokens", "FILE", "", "also write the intermediate tokens here");
+  declare_feet_option(cli);
   declare_model_options(cli);
   cli.example("nec transfer human_wave.bvh --to dragon.bvh --model runs/tat -o dragon_wave.bvh");
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
   TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const tat::TokenFile tokens = encode_file(session, cli.positional_value("SRC.bvh"), cli.up_axis("--up"));
-  decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"), cli.value("-o"));
+  const FootLockReport feet = decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"),
+                                          cli.is_set("--free-feet"), cli.value("-o"));
   if (!cli.value("--tokens").empty()) tat::write_tokens(cli.value("--tokens"), tokens);
-  fmt::print("wrote {}: {} frames of {} on the skeleton of {} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
-             cli.positional_value("SRC.bvh"), cli.value("--to"), seconds_since(start));
+  fmt::print("wrote {}: {} frames of {} on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
+             cli.positional_value("SRC.bvh"), cli.value("--to"), feet_summary(feet), seconds_since(start));
   return 0;
 }
 

@@ -186,6 +186,18 @@ TEST_F(CliTat, EncodeDecodeOntoAnotherSkeletonKeepsItsNamesAndChannels) {
                                          " -o " + moved + " --threads 1");
   ASSERT_EQ(transfer.exit_code, 0) << transfer.output;
   EXPECT_EQ(read_file(moved), read_file(out));  // transfer = encode + decode
+
+  // Feet are pinned by turning leg joints only: with --free-feet the root moves and turns the same.
+  const std::string free_feet = path("dog_walk_free_feet.bvh");
+  const CommandResult free_transfer = run_nec("transfer " + source + " --to " + target + " --model " + shared("tat") +
+                                              " -o " + free_feet + " --free-feet --threads 1");
+  ASSERT_EQ(free_transfer.exit_code, 0) << free_transfer.output;
+  const Clip free_clip = read_bvh(free_feet);
+  ASSERT_EQ(free_clip.motion.frame_count, decoded.motion.frame_count);
+  for (int t = 0; t < decoded.motion.frame_count; ++t) {
+    EXPECT_LT((free_clip.motion.translation(t, 0) - decoded.motion.translation(t, 0)).norm(), 1e-9) << t;
+    EXPECT_LT(free_clip.motion.rotation(t, 0).angularDistance(decoded.motion.rotation(t, 0)), 1e-9) << t;
+  }
 }
 
 TEST_F(CliTat, LongClipsAreEncodedInWindows) {

@@ -46,9 +46,11 @@ TEST(TransferCheck, WalkingCreaturesTravelForwardAndPlantTheirFeetInTheGaitRhyth
     // Body lengths per second -> body sizes (diameters) per second.
     const double expected_speed =
         w.synthesized.spec.speed * w.creature.body_length / w.creature.skeleton.diameter();
-    std::printf("%-9s turn %.1f speed %.3f (spec %.3f) dir %.1f  feet %d/%g  touchdowns/s %.2f (gait %.2f)  contact %.2f\n",
+    std::printf("%-9s turn %.1f speed %.3f (spec %.3f) dir %.1f  feet %d/%g  touchdowns/s %.2f (gait %.2f)  contact %.2f"
+                "  skate %.3f\n",
                 std::string(zoo::body_plan_name(plan)).c_str(), m.heading_change, m.speed, expected_speed, m.travel_direction,
-                m.gait.feet, legs, m.gait.touchdowns_per_second, expected_touchdowns, m.gait.contact_fraction);
+                m.gait.feet, legs, m.gait.touchdowns_per_second, expected_touchdowns, m.gait.contact_fraction,
+                m.gait.skate);
     EXPECT_NEAR(m.speed, expected_speed, 0.2 * expected_speed);
     EXPECT_NEAR(m.travel_direction, 0.0, 10.0);
     EXPECT_NEAR(m.heading_change, 0.0, 5.0);
@@ -91,6 +93,23 @@ TEST(TransferCheck, AFrozenRootAndAStretchedBoneShow) {
   EXPECT_TRUE(std::isnan(check.direction_difference));
   EXPECT_NEAR(check.output.bone_length_change, 0.1, 1e-9);
   EXPECT_LT(check.output.gait.touchdowns_per_second, check.source.gait.touchdowns_per_second);
+}
+
+// A body that outruns its legs: the planted feet slide, which foot skate shows and touchdowns lose.
+TEST(TransferCheck, FeetThatSlideShowAsFootSkate) {
+  const Walk w = walk(zoo::BodyPlan::Quadruped);
+  Clip sliding = w.clip;
+  const Vec3 start = w.clip.motion.translation(0, 0);
+  for (int t = 0; t < sliding.motion.frame_count; ++t) {
+    Vec3& root = sliding.motion.translation(t, 0);
+    root.x() = start.x() + 1.8 * (root.x() - start.x());
+    root.z() = start.z() + 1.8 * (root.z() - start.z());
+  }
+  const TransferCheck check = check_transfer(w.clip, sliding);
+  std::printf("skate %.3f -> %.3f sizes/s, touchdowns/s %.2f -> %.2f\n", check.source.gait.skate,
+              check.output.gait.skate, check.source.gait.touchdowns_per_second, check.output.gait.touchdowns_per_second);
+  EXPECT_GT(check.output.gait.skate, 2.0 * check.source.gait.skate);
+  EXPECT_LT(check.output.gait.touchdowns_per_second, 0.5 * check.source.gait.touchdowns_per_second);
 }
 
 // A person walking (Bandai): forward, although the head leans behind the hips

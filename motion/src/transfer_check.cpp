@@ -35,8 +35,10 @@ GaitMeasurements measure_gait(const Clip& clip, double size) {
   for (const Vec3& p : positions) floor = std::min(floor, p.y());
 
   GaitMeasurements gait;
+  gait.skate = kNaN;
   if (frames < 3) return gait;
-  long planted = 0, touchdowns = 0;
+  long planted = 0, touchdowns = 0, low_frames = 0;
+  double low_speed_sum = 0.0;
   for (const int leaf : clip.skeleton.leaves()) {
     std::vector<bool> contact(frames);
     for (int t = 0; t < frames; ++t) {
@@ -45,7 +47,9 @@ GaitMeasurements measure_gait(const Clip& clip, double size) {
       Vec3 step = at(b, leaf) - at(a, leaf);
       step.y() = 0.0;
       const double speed = step.norm() / ((b - a) / m.fps) / size;
-      contact[t] = (at(t, leaf).y() - floor) / size < kContactHeight && speed < kContactSpeed;
+      const bool low = (at(t, leaf).y() - floor) / size < kContactHeight;
+      contact[t] = low && speed < kContactSpeed;
+      if (low) low_speed_sum += speed, ++low_frames;
     }
     const long frames_planted = std::count(contact.begin(), contact.end(), true);
     if (frames_planted == 0) continue;
@@ -58,6 +62,7 @@ GaitMeasurements measure_gait(const Clip& clip, double size) {
   }
   if (gait.feet > 0) gait.contact_fraction = static_cast<double>(planted) / (static_cast<double>(gait.feet) * frames);
   gait.touchdowns_per_second = touchdowns / m.duration_seconds();
+  if (low_frames > 0) gait.skate = low_speed_sum / static_cast<double>(low_frames);
   return gait;
 }
 

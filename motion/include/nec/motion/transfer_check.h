@@ -20,6 +20,9 @@ struct GaitMeasurements {
   int feet = 0;                       // leaf joints that spend time near the ground
   double contact_fraction = 0.0;      // share of (frame, foot) pairs with the foot planted
   double touchdowns_per_second = 0.0; // foot plants (of all feet together) per second
+  // Foot skate: mean horizontal speed (body sizes/s) of leaf joints over the frames they spend below
+  // kContactHeight, however fast they move there; NaN if none comes down that low.
+  double skate = 0.0;
 };
 
 struct MotionMeasurements {

@@ -1,0 +1,232 @@
+// Foot locking: pin planted feet and bend their legs to reach the pins.
+#include "nec/motion/foot_lock.h"
+
+#include "nec/motion/kinematics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace nec {
+namespace {
+
+constexpr int kMaxLegJoints = 4;
+
+// A foot and the two joints that move it: the hip swings, the knee bends (-1: a one-joint leg only swings).
+struct Leg {
+  int foot = -1;
+  int hip = -1;
+  int knee = -1;
+};
+
+// The leg above `foot`: its parent and up to the first joint of the limb, at most kMaxLegJoints, never the
+// root. An empty leg (hip -1) when the foot hangs from the root.
+Leg leg_above(const Skeleton& skeleton, const std::vector<std::vector<int>>& children, int foot) {
+  std::vector<int> chain;  // from the foot's parent upwards
+  for (int j = skeleton.parents[foot]; j > 0 && static_cast<int>(chain.size()) < kMaxLegJoints;
+       j = skeleton.parents[j]) {
+    chain.push_back(j);
+    if (children[skeleton.parents[j]].size() > 1) break;
+  }
+  Leg leg;
+  leg.foot = foot;
+  if (chain.empty()) return leg;
+  leg.hip = chain.back();
+  if (chain.size() > 1) leg.knee = chain[(chain.size() - 1) / 2];
+  return leg;
+}
+
+double median(std::vector<double> values) {
+  const size_t half = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + half, values.end());
+  const double upper = values[half];
+  if (values.size() % 2 == 1) return upper;
+  return 0.5 * (upper + *std::max_element(values.begin(), values.begin() + half));
+}
+
+struct Plant {
+  int begin = 0, end = 0;  // frames [begin, end)
+  Vec3 pin = Vec3::Zero();
+};
+
+// Plants of one foot: runs of at least min_plant_frames frames below the contact height (over `ground`) and
+// speed, each
+// pinned at the foot's median position over it.
+std::vector<Plant> plants_of(const std::vector<Vec3>& positions, int joints, int frames, int foot, double ground,
+                             double size, double fps, double contact_speed, const FootLockOptions& options,
+                             double& slide_sum,
+                             long& slide_frames) {
+  const auto at = [&](int t) -> const Vec3& { return positions[static_cast<size_t>(t) * joints + foot]; };
+  std::vector<double> speed(frames, 0.0);
+  std::vector<bool> down(frames, false);
+  for (int t = 0; t < frames && frames > 1; ++t) {
+    const int a = std::max(0, t - 1), b = std::min(frames - 1, t + 1);
+    Vec3 step = at(b) - at(a);
+    step.y() = 0.0;
+    speed[t] = step.norm() * fps / (b - a) / size;
+    down[t] = (at(t).y() - ground) / size < options.contact_height && speed[t] < contact_speed;
+  }
+  std::vector<Plant> plants;
+  for (int t = 0; t < frames;) {
+    if (!down[t]) {
+      ++t;
+      continue;
+    }
+    Plant plant;
+    plant.begin = t;
+    while (t < frames && down[t]) ++t;
+    plant.end = t;
+    if (plant.end - plant.begin < options.min_plant_frames) continue;
+    for (int u = plant.begin; u < plant.end; ++u) slide_sum += speed[u];
+    slide_frames += plant.end - plant.begin;
+    for (int axis = 0; axis < 3; ++axis) {
+      std::vector<double> values;
+      for (int u = plant.begin; u < plant.end; ++u) values.push_back(at(u)[axis]);
+      plant.pin[axis] = median(values);
+    }
+    plants.push_back(plant);
+  }
+  return plants;
+}
+
+// How much the pin of `plant` holds at frame t: 1 over the plant, fading linearly to 0 over blend_frames.
+double pin_weight(const Plant& plant, int t, int blend_frames) {
+  if (t >= plant.begin && t < plant.end) return 1.0;
+  const int away = t < plant.begin ? plant.begin - t : t - plant.end + 1;
+  return std::max(0.0, 1.0 - static_cast<double>(away) / (blend_frames + 1));
+}
+
+// Sets joint j's local rotation so that its global rotation becomes `global`.
+void set_global_rotation(const Skeleton& skeleton, const Pose& pose, Motion& motion, int t, int j,
+                         const Quat& global) {
+  const Quat parent = pose.rotation(t, skeleton.parents[j]);
+  motion.rotation(t, j) = (parent.conjugate() * global).normalized();
+}
+
+// Two-bone IK at frame t: bend the knee so that hip-to-foot is as long as hip-to-target (within reach), then
+// swing the hip to put the foot on the target. `pose` must be the motion's FK; it is stale afterwards.
+void reach(const Skeleton& skeleton, const Pose& pose, Motion& motion, int t, const Leg& leg, const Vec3& target) {
+  const Vec3 hip = pose.position(t, leg.hip);
+  Vec3 foot = pose.position(t, leg.foot);
+  if (leg.knee >= 0) {
+    const Vec3 knee = pose.position(t, leg.knee);
+    const double a = (hip - knee).norm(), b = (foot - knee).norm();
+    const Vec3 n = (hip - knee).cross(foot - knee);
+    if (a > 1e-9 && b > 1e-9 && n.norm() > 1e-9 * a * b) {
+      const double d = std::clamp((target - hip).norm(), std::abs(a - b), a + b);
+      const double bend = std::acos(std::clamp((hip - knee).dot(foot - knee) / (a * b), -1.0, 1.0));
+      const double wanted = std::acos(std::clamp((a * a + b * b - d * d) / (2.0 * a * b), -1.0, 1.0));
+      const Quat knee_turn(Eigen::AngleAxisd(wanted - bend, n.normalized()));
+      set_global_rotation(skeleton, pose, motion, t, leg.knee, knee_turn * pose.rotation(t, leg.knee));
+      foot = knee + knee_turn * (foot - knee);
+    }
+  }
+  const Quat swing = Quat::FromTwoVectors(foot - hip, target - hip);
+  // The hip's parent is above the leg and keeps its rotation; the knee's local rotation, set above, turns
+  // with the hip.
+  set_global_rotation(skeleton, pose, motion, t, leg.hip, swing * pose.rotation(t, leg.hip));
+}
+
+}  // namespace
+
+void FootLockOptions::validate() const {
+  if (!(contact_height > 0.0)) throw std::invalid_argument("contact_height must be positive");
+  if (!(foot_height >= 0.0)) throw std::invalid_argument("foot_height must not be negative");
+  if (!(contact_speed > 0.0)) throw std::invalid_argument("contact_speed must be positive");
+  if (!(contact_speed_ratio >= 0.0)) throw std::invalid_argument("contact_speed_ratio must not be negative");
+  if (min_plant_frames < 1) throw std::invalid_argument("min_plant_frames must be at least 1");
+  if (blend_frames < 0) throw std::invalid_argument("blend_frames must not be negative");
+}
+
+FootLockReport lock_feet(const Skeleton& skeleton, Motion& motion, const FootLockOptions& options) {
+  options.validate();
+  if (motion.joint_count != skeleton.joint_count()) {
+    throw std::invalid_argument("lock_feet: motion has " + std::to_string(motion.joint_count) +
+                                " joints, skeleton has " + std::to_string(skeleton.joint_count()));
+  }
+  FootLockReport report;
+  const int frames = motion.frame_count, joints = motion.joint_count;
+  const double size = skeleton.diameter();
+  if (frames < 2 || !(size > 0.0)) return report;
+
+  std::vector<Vec3> positions;
+  joint_positions(skeleton, motion, positions);
+  std::vector<double> lowest(frames);
+  for (int t = 0; t < frames; ++t) {
+    double y = positions[static_cast<size_t>(t) * joints].y();
+    for (int j = 1; j < joints; ++j) y = std::min(y, positions[static_cast<size_t>(t) * joints + j].y());
+    lowest[t] = y;
+  }
+  const double floor = median(lowest);
+  double root_path = 0.0;  // horizontal
+  for (int t = 1; t < frames; ++t) {
+    Vec3 step = positions[static_cast<size_t>(t) * joints] - positions[static_cast<size_t>(t - 1) * joints];
+    step.y() = 0.0;
+    root_path += step.norm();
+  }
+  const double root_speed = root_path / size * motion.fps / (frames - 1);
+  const double contact_speed = std::max(options.contact_speed, options.contact_speed_ratio * root_speed);
+
+  // Feet and their plants; two feet on one leg (toes of one paw) would fight: the first keeps it.
+  const std::vector<std::vector<int>> children = skeleton.children_lists();
+  std::vector<Leg> legs;
+  std::vector<std::vector<Plant>> plants;
+  std::vector<bool> hip_taken(joints, false);
+  double slide_sum = 0.0;
+  long slide_frames = 0;
+  for (const int leaf : skeleton.leaves()) {
+    const Leg leg = leg_above(skeleton, children, leaf);
+    if (leg.hip < 0 || hip_taken[leg.hip]) continue;
+    // Its own ground: decoded feet do not all come down to the same height.
+    std::vector<double> heights(frames);
+    for (int t = 0; t < frames; ++t) heights[t] = positions[static_cast<size_t>(t) * joints + leaf].y();
+    std::nth_element(heights.begin(), heights.begin() + frames / 10, heights.end());
+    const double ground = heights[frames / 10];
+    if ((ground - floor) / size > options.foot_height) continue;
+    std::vector<Plant> found = plants_of(positions, joints, frames, leaf, ground, size, motion.fps, contact_speed,
+                                         options, slide_sum, slide_frames);
+    if (found.empty()) continue;
+    hip_taken[leg.hip] = true;
+    legs.push_back(leg);
+    plants.push_back(std::move(found));
+    report.planted_spans += static_cast<int>(plants.back().size());
+  }
+  report.feet = static_cast<int>(legs.size());
+  if (legs.empty()) return report;
+  report.mean_slide = slide_sum / static_cast<double>(slide_frames);
+
+  // Per frame and foot, its strongest plant: the pin over the plant; around it, the shift that the pin made
+  // at the plant's nearer end, fading.
+  std::vector<std::vector<std::pair<double, Vec3>>> targets(legs.size(), std::vector<std::pair<double, Vec3>>(frames));
+  for (size_t k = 0; k < legs.size(); ++k) {
+    const auto was = [&](int t) -> const Vec3& { return positions[static_cast<size_t>(t) * joints + legs[k].foot]; };
+    for (int t = 0; t < frames; ++t) {
+      targets[k][t] = {0.0, was(t)};
+      for (const Plant& plant : plants[k]) {
+        const double w = pin_weight(plant, t, options.blend_frames);
+        if (w <= targets[k][t].first) continue;
+        const int end = t < plant.begin ? plant.begin : std::min(t, plant.end - 1);
+        targets[k][t] = {w, was(t) + w * (plant.pin - was(end))};
+      }
+    }
+  }
+  for (size_t k = 0; k < legs.size(); ++k) {
+    const Pose pose = forward_kinematics(skeleton, motion);
+    for (int t = 0; t < frames; ++t) {
+      if (targets[k][t].first > 0.0) reach(skeleton, pose, motion, t, legs[k], targets[k][t].second);
+    }
+  }
+  joint_positions(skeleton, motion, positions);
+  for (size_t k = 0; k < legs.size(); ++k) {
+    for (int t = 0; t < frames; ++t) {
+      if (targets[k][t].first < 1.0) continue;
+      const double miss = (positions[static_cast<size_t>(t) * joints + legs[k].foot] - targets[k][t].second).norm();
+      report.max_miss = std::max(report.max_miss, miss / size);
+    }
+  }
+  return report;
+}
+
+}  // namespace nec
