@@ -51,17 +51,23 @@ struct Plant {
   Vec3 pin = Vec3::Zero();
 };
 
-// Plants of one foot: runs of at least min_plant_frames frames below the contact height (over `ground`) and
-// speed, each
-// pinned at the foot's median position over it.
-std::vector<Plant> plants_of(const std::vector<Vec3>& positions, int joints, int frames, int foot, double ground,
-                             double size, double fps, double contact_speed, const FootLockOptions& options,
-                             double& slide_sum,
+// Joint positions of every frame, (T, J).
+struct Positions {
+  std::vector<Vec3> data;
+  int joints = 0;
+  const Vec3& at(int t, int j) const { return data[static_cast<size_t>(t) * joints + j]; }
+};
+
+// Plants of one foot: runs of at least min_plant_frames frames within the contact height of `ground` and
+// slower than `contact_speed`, each pinned at the foot's median ground position over it, at its lowest height
+// there.
+std::vector<Plant> plants_of(const Positions& positions, int frames, int foot, double ground, double size,
+                             double fps, double contact_speed, const FootLockOptions& options, double& slide_sum,
                              long& slide_frames) {
-  const auto at = [&](int t) -> const Vec3& { return positions[static_cast<size_t>(t) * joints + foot]; };
+  const auto at = [&](int t) -> const Vec3& { return positions.at(t, foot); };
   std::vector<double> speed(frames, 0.0);
   std::vector<bool> down(frames, false);
-  for (int t = 0; t < frames && frames > 1; ++t) {
+  for (int t = 0; t < frames; ++t) {
     const int a = std::max(0, t - 1), b = std::min(frames - 1, t + 1);
     Vec3 step = at(b) - at(a);
     step.y() = 0.0;
@@ -81,11 +87,13 @@ std::vector<Plant> plants_of(const std::vector<Vec3>& positions, int joints, int
     if (plant.end - plant.begin < options.min_plant_frames) continue;
     for (int u = plant.begin; u < plant.end; ++u) slide_sum += speed[u];
     slide_frames += plant.end - plant.begin;
-    for (int axis = 0; axis < 3; ++axis) {
+    for (const int axis : {0, 2}) {
       std::vector<double> values;
       for (int u = plant.begin; u < plant.end; ++u) values.push_back(at(u)[axis]);
       plant.pin[axis] = median(values);
     }
+    plant.pin.y() = at(plant.begin).y();
+    for (int u = plant.begin; u < plant.end; ++u) plant.pin.y() = std::min(plant.pin.y(), at(u).y());
     plants.push_back(plant);
   }
   return plants;
@@ -151,21 +159,19 @@ FootLockReport lock_feet(const Skeleton& skeleton, Motion& motion, const FootLoc
   const double size = skeleton.diameter();
   if (frames < 2 || !(size > 0.0)) return report;
 
-  std::vector<Vec3> positions;
-  joint_positions(skeleton, motion, positions);
+  Positions positions{{}, joints};
+  joint_positions(skeleton, motion, positions.data);
   std::vector<double> lowest(frames);
-  for (int t = 0; t < frames; ++t) {
-    double y = positions[static_cast<size_t>(t) * joints].y();
-    for (int j = 1; j < joints; ++j) y = std::min(y, positions[static_cast<size_t>(t) * joints + j].y());
-    lowest[t] = y;
-  }
-  const double floor = median(lowest);
   double root_path = 0.0;  // horizontal
-  for (int t = 1; t < frames; ++t) {
-    Vec3 step = positions[static_cast<size_t>(t) * joints] - positions[static_cast<size_t>(t - 1) * joints];
+  for (int t = 0; t < frames; ++t) {
+    lowest[t] = positions.at(t, 0).y();
+    for (int j = 1; j < joints; ++j) lowest[t] = std::min(lowest[t], positions.at(t, j).y());
+    if (t == 0) continue;
+    Vec3 step = positions.at(t, 0) - positions.at(t - 1, 0);
     step.y() = 0.0;
     root_path += step.norm();
   }
+  const double floor = median(lowest);
   const double root_speed = root_path / size * motion.fps / (frames - 1);
   const double contact_speed = std::max(options.contact_speed, options.contact_speed_ratio * root_speed);
 
@@ -181,12 +187,12 @@ FootLockReport lock_feet(const Skeleton& skeleton, Motion& motion, const FootLoc
     if (leg.hip < 0 || hip_taken[leg.hip]) continue;
     // Its own ground: decoded feet do not all come down to the same height.
     std::vector<double> heights(frames);
-    for (int t = 0; t < frames; ++t) heights[t] = positions[static_cast<size_t>(t) * joints + leaf].y();
+    for (int t = 0; t < frames; ++t) heights[t] = positions.at(t, leaf).y();
     std::nth_element(heights.begin(), heights.begin() + frames / 10, heights.end());
     const double ground = heights[frames / 10];
     if ((ground - floor) / size > options.foot_height) continue;
-    std::vector<Plant> found = plants_of(positions, joints, frames, leaf, ground, size, motion.fps, contact_speed,
-                                         options, slide_sum, slide_frames);
+    std::vector<Plant> found =
+        plants_of(positions, frames, leaf, ground, size, motion.fps, contact_speed, options, slide_sum, slide_frames);
     if (found.empty()) continue;
     hip_taken[leg.hip] = true;
     legs.push_back(leg);
@@ -201,7 +207,7 @@ FootLockReport lock_feet(const Skeleton& skeleton, Motion& motion, const FootLoc
   // at the plant's nearer end, fading.
   std::vector<std::vector<std::pair<double, Vec3>>> targets(legs.size(), std::vector<std::pair<double, Vec3>>(frames));
   for (size_t k = 0; k < legs.size(); ++k) {
-    const auto was = [&](int t) -> const Vec3& { return positions[static_cast<size_t>(t) * joints + legs[k].foot]; };
+    const auto was = [&](int t) -> const Vec3& { return positions.at(t, legs[k].foot); };
     for (int t = 0; t < frames; ++t) {
       targets[k][t] = {0.0, was(t)};
       for (const Plant& plant : plants[k]) {
@@ -218,11 +224,11 @@ FootLockReport lock_feet(const Skeleton& skeleton, Motion& motion, const FootLoc
       if (targets[k][t].first > 0.0) reach(skeleton, pose, motion, t, legs[k], targets[k][t].second);
     }
   }
-  joint_positions(skeleton, motion, positions);
+  joint_positions(skeleton, motion, positions.data);
   for (size_t k = 0; k < legs.size(); ++k) {
     for (int t = 0; t < frames; ++t) {
       if (targets[k][t].first < 1.0) continue;
-      const double miss = (positions[static_cast<size_t>(t) * joints + legs[k].foot] - targets[k][t].second).norm();
+      const double miss = (positions.at(t, legs[k].foot) - targets[k][t].second).norm();
       report.max_miss = std::max(report.max_miss, miss / size);
     }
   }

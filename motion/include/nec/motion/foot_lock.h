@@ -12,11 +12,12 @@
 // per second or contact_speed_ratio times the root's mean speed, whichever is
 // faster: a walk whose legs do not keep up with its body (decoded motion
 // often) slides its feet at a fraction of the body's speed.
-// Over a plant the foot is pinned at its median position; on either side the
-// shift that the pin made at that end of the plant fades out over blend_frames
-// frames. Its leg is the chain of joints
-// above it up to the first joint of the limb (the child of a joint with
-// several children), at most four joints, never the root: the knee (middle
+// Over a plant the foot is pinned at its median ground position and at its
+// lowest height (a pin at the median height lifted the feet of a standing dog
+// off the floor); on either side the shift that the pin made at that end of the
+// plant fades out over blend_frames frames. Its leg is the chain of joints above
+// it up to the first joint of the limb (the child of a joint with several
+// children), at most four joints, never the root: the knee (middle
 // joint of the chain) bends to set the hip-to-foot distance, the hip (top
 // joint) swings the foot onto the pin. Rotations below the knee, the root and
 // every other joint keep their values, so bone lengths never change.
@@ -31,8 +32,8 @@ struct FootLockOptions {
   double contact_height = 0.04;      // body sizes above the foot's ground
   double contact_speed = 0.3;        // body sizes per second, horizontal
   double contact_speed_ratio = 0.75;  // times the root's mean horizontal speed
-  int min_plant_frames = 3;      // shorter plants are left alone
-  int blend_frames = 4;          // frames over which a pin fades in and out
+  int min_plant_frames = 3;          // shorter plants are left alone
+  int blend_frames = 4;              // frames over which a pin's shift fades out
 
   // Throws std::invalid_argument naming the bad field.
   void validate() const;
