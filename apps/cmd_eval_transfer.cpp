@@ -51,7 +51,8 @@ int run_eval_transfer(int argc, char** argv) {
                   "in its own body sizes (skeleton diameters): root speed and their ratio (1 = as many body sizes per\n"
                   "second), heading change, direction of travel against the facing (0 = forward), feet that plant\n"
                   "(leaf joints near the floor and nearly still) with touchdowns per second, foot skate (how fast leaf\n"
-                  "joints near the floor move), and the largest bone-length change of the output. Both files are resampled to 30 fps with +Y up before measuring.");
+                  "joints near the floor move), and the largest bone-length change of the output. Both files are\n"
+                  "resampled to 30 fps with +Y up before measuring.");
   cli.positional("PAIRS", "SRC.bvh OUT.bvh [SRC.bvh OUT.bvh ...]", true, true);
   cli.option("--up", "AXIS", "auto", "up axis of the files: auto, y or z");
   cli.option("--json", "OUT.json", "", "also write the results as JSON");
