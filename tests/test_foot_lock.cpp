@@ -7,6 +7,7 @@
 #include "nec/motion/transfer_check.h"
 #include "nec/zoo/creature.h"
 #include "nec/zoo/motion_synthesis.h"
+#include "test_support.h"
 
 #include <gtest/gtest.h>
 
@@ -26,12 +27,7 @@ Clip sliding_walk(zoo::BodyPlan plan, double outrun, zoo::SynthesizedMotion& syn
   spec.seconds = 4.0;
   synthesized = zoo::synthesize_motion(creature, spec);
   Clip clip = preprocess(Clip{creature.skeleton, synthesized.motion, {}}, "walk.bvh").clip;
-  const Vec3 start = clip.motion.translation(0, 0);
-  for (int t = 0; t < clip.motion.frame_count; ++t) {
-    Vec3& root = clip.motion.translation(t, 0);
-    root.x() = start.x() + outrun * (root.x() - start.x());
-    root.z() = start.z() + outrun * (root.z() - start.z());
-  }
+  testing::stretch_root_travel(clip.motion, outrun);
   return clip;
 }
 

@@ -99,12 +99,7 @@ TEST(TransferCheck, AFrozenRootAndAStretchedBoneShow) {
 TEST(TransferCheck, FeetThatSlideShowAsFootSkate) {
   const Walk w = walk(zoo::BodyPlan::Quadruped);
   Clip sliding = w.clip;
-  const Vec3 start = w.clip.motion.translation(0, 0);
-  for (int t = 0; t < sliding.motion.frame_count; ++t) {
-    Vec3& root = sliding.motion.translation(t, 0);
-    root.x() = start.x() + 1.8 * (root.x() - start.x());
-    root.z() = start.z() + 1.8 * (root.z() - start.z());
-  }
+  testing::stretch_root_travel(sliding.motion, 1.8);
   const TransferCheck check = check_transfer(w.clip, sliding);
   std::printf("skate %.3f -> %.3f sizes/s, touchdowns/s %.2f -> %.2f\n", check.source.gait.skate,
               check.output.gait.skate, check.source.gait.touchdowns_per_second, check.output.gait.touchdowns_per_second);

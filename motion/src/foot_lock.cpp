@@ -68,10 +68,7 @@ std::vector<Plant> plants_of(const Positions& positions, int frames, int foot, d
   std::vector<double> speed(frames, 0.0);
   std::vector<bool> down(frames, false);
   for (int t = 0; t < frames; ++t) {
-    const int a = std::max(0, t - 1), b = std::min(frames - 1, t + 1);
-    Vec3 step = at(b) - at(a);
-    step.y() = 0.0;
-    speed[t] = step.norm() * fps / (b - a) / size;
+    speed[t] = horizontal_speed(positions.data, positions.joints, foot, t, fps) / size;
     down[t] = (at(t).y() - ground) / size < options.contact_height && speed[t] < contact_speed;
   }
   std::vector<Plant> plants;

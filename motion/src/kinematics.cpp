@@ -1,6 +1,7 @@
 // Forward kinematics over all frames.
 #include "nec/motion/kinematics.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace nec {
@@ -55,6 +56,15 @@ void joint_positions(const Skeleton& skeleton, const Motion& motion, std::vector
     forward_kinematics_frame(parents, joints, motion.rotations.data() + base, motion.translations.data() + base,
                              global.data(), positions.data() + base);
   }
+}
+
+double horizontal_speed(const std::vector<Vec3>& positions, int joints, int joint, int frame, double fps) {
+  const int frames = static_cast<int>(positions.size() / static_cast<size_t>(joints));
+  const int a = std::max(0, frame - 1), b = std::min(frames - 1, frame + 1);
+  if (a == b) return 0.0;
+  Vec3 step = positions[static_cast<size_t>(b) * joints + joint] - positions[static_cast<size_t>(a) * joints + joint];
+  step.y() = 0.0;
+  return step.norm() * fps / (b - a);
 }
 
 std::vector<Vec3> end_site_positions(const Skeleton& skeleton, const Pose& pose) {

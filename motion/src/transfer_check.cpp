@@ -42,11 +42,7 @@ GaitMeasurements measure_gait(const Clip& clip, double size) {
   for (const int leaf : clip.skeleton.leaves()) {
     std::vector<bool> contact(frames);
     for (int t = 0; t < frames; ++t) {
-      // Centred difference (one-sided at the ends), horizontal only.
-      const int a = std::max(0, t - 1), b = std::min(frames - 1, t + 1);
-      Vec3 step = at(b, leaf) - at(a, leaf);
-      step.y() = 0.0;
-      const double speed = step.norm() / ((b - a) / m.fps) / size;
+      const double speed = horizontal_speed(positions, joints, leaf, t, m.fps) / size;
       const bool low = (at(t, leaf).y() - floor) / size < kContactHeight;
       contact[t] = low && speed < kContactSpeed;
       if (low) low_speed_sum += speed, ++low_frames;

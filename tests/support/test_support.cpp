@@ -105,6 +105,16 @@ std::string TempDir::write(const std::string& relative, const std::string& text)
   return file.string();
 }
 
+void stretch_root_travel(Motion& motion, double factor) {
+  if (motion.frame_count == 0) return;
+  const Vec3 start = motion.translation(0, 0);
+  for (int t = 0; t < motion.frame_count; ++t) {
+    Vec3& root = motion.translation(t, 0);
+    root.x() = start.x() + factor * (root.x() - start.x());
+    root.z() = start.z() + factor * (root.z() - start.z());
+  }
+}
+
 double max_position_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
   double worst = 0.0;

@@ -51,6 +51,10 @@ CommandResult run_nec(const std::string& arguments);
 // The last line of `output` that starts with `prefix` ("" if none), e.g. the last "step 4/4" of a training log.
 std::string last_line_starting(const std::string& output, const std::string& prefix);
 
+// Stretches the root's horizontal travel about its frame-0 position by `factor`: above 1 the body outruns its
+// legs and planted feet slide.
+void stretch_root_travel(Motion& motion, double factor);
+
 // Largest distance between corresponding positions of two pose sets.
 double max_position_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b);
 

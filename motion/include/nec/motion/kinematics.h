@@ -23,6 +23,9 @@ struct Pose {
 Pose forward_kinematics(const Skeleton& skeleton, const Motion& motion);
 // Positions only, written into `positions` (resized to T * J); reuses its storage.
 void joint_positions(const Skeleton& skeleton, const Motion& motion, std::vector<Vec3>& positions);
+// Horizontal (x, z) speed of `joint` at `frame`, units per second, from positions (T, J) as joint_positions
+// writes them: a centred difference, one-sided at the clip's ends; 0 for a single frame.
+double horizontal_speed(const std::vector<Vec3>& positions, int joints, int joint, int frame, double fps);
 // Global positions of the end sites, (T, E) in skeleton.end_sites order.
 std::vector<Vec3> end_site_positions(const Skeleton& skeleton, const Pose& pose);
 
