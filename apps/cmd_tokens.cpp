@@ -5,6 +5,7 @@
 
 #include "nec/motion/bvh.h"
 #include "nec/motion/error.h"
+#include "nec/motion/follow_heading.h"
 #include "nec/motion/foot_lock.h"
 #include "nec/tat/tokens.h"
 
@@ -12,13 +13,13 @@
 #include <torch/torch.h>
 
 #include <chrono>
+#include <optional>
 
 namespace nec::app {
 namespace {
 
-// Tokens of one BVH file.
-tat::TokenFile encode_file(TokenizerSession& session, const std::string& path, UpAxis up) {
-  const PreparedClip source = prepare_for_model(path, session.model.info.fps, up);
+// Tokens of one BVH file (`path`), prepared for the model.
+tat::TokenFile encode_file(TokenizerSession& session, const PreparedClip& source, const std::string& path) {
   const Features features = encode_features(source.clip.skeleton, source.clip.motion);
   const at::Tensor codes = tat::encode_clip(*session.model.tokenizer, features,
                                             session.embed(source.clip.skeleton, source.canonical_names),
@@ -42,10 +43,17 @@ tat::TokenFile encode_file(TokenizerSession& session, const std::string& path, U
   return tokens;
 }
 
-// Decodes tokens onto the skeleton of `target_path`, pins the feet it puts down unless `free_feet`, and
-// writes OUT.bvh in that file's units, up axis, joint names, channels and Euler orders.
-FootLockReport decode_onto(TokenizerSession& session, const tat::TokenFile& tokens, const std::string& target_path,
-                           UpAxis up, bool free_feet, const std::string& out_path) {
+// What decode_onto did after decoding.
+struct DecodeReport {
+  std::optional<HeadingReport> heading;  // turned to follow a source's facing
+  FootLockReport feet;
+};
+
+// Decodes tokens onto the skeleton of `target_path`, turns it to face where `heading_source` faces frame by
+// frame (when given: the clip the tokens came from, prepared for the model), pins the feet it puts down unless
+// `free_feet`, and writes OUT.bvh in that file's units, up axis, joint names, channels and Euler orders.
+DecodeReport decode_onto(TokenizerSession& session, const tat::TokenFile& tokens, const std::string& target_path,
+                         UpAxis up, const Clip* heading_source, bool free_feet, const std::string& out_path) {
   const tat::TatConfig& config = session.model.tokenizer->config();
   if (tokens.layers > config.quantizer.layers || tokens.codebook_size != config.quantizer.codebook_size ||
       tokens.downsampling != config.downsampling()) {
@@ -64,11 +72,12 @@ FootLockReport decode_onto(TokenizerSession& session, const tat::TokenFile& toke
       tat::decode_clip(*session.model.tokenizer, codes, tokens.frames, session.embed(skeleton, target.canonical_names),
                        skeleton, tokens.fps, session.windows);
   Clip out{skeleton, decode_features(skeleton, features), {}};
-  FootLockReport feet;
-  if (!free_feet) feet = lock_feet(out.skeleton, out.motion);
+  DecodeReport report;
+  if (heading_source != nullptr) report.heading = follow_heading(*heading_source, out.skeleton, out.motion);
+  if (!free_feet) report.feet = lock_feet(out.skeleton, out.motion);
   out = denormalize(out, with_heading(target.normalization, tokens.heading_degrees));
   write_bvh(out_path, out.skeleton, out.motion);
-  return feet;
+  return report;
 }
 
 void declare_feet_option(CommandLine& cli) {
@@ -76,10 +85,18 @@ void declare_feet_option(CommandLine& cli) {
                           "to reach the pins, as decoded feet slide)");
 }
 
-std::string feet_summary(const FootLockReport& feet) {
-  if (feet.feet == 0) return "";
-  return fmt::format("; {} plants of {} feet pinned (they slid {:.2f} body sizes/s; largest miss {:.3f} sizes)",
-                     feet.planted_spans, feet.feet, feet.mean_slide, feet.max_miss);
+std::string decode_summary(const DecodeReport& report) {
+  std::string out;
+  if (report.heading) {
+    out += fmt::format("; turned to face as the source does ({:.1f}° on average, {:.1f}° at most)",
+                       report.heading->mean_turn, report.heading->max_turn);
+  }
+  const FootLockReport& feet = report.feet;
+  if (feet.feet > 0) {
+    out += fmt::format("; {} plants of {} feet pinned (they slid {:.2f} body sizes/s; largest miss {:.3f} sizes)",
+                       feet.planted_spans, feet.feet, feet.mean_slide, feet.max_miss);
+  }
+  return out;
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -100,7 +117,9 @@ int run_encode(int argc, char** argv) {
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
   TokenizerSession session = open_tokenizer(tokenizer_options(cli));
-  const tat::TokenFile tokens = encode_file(session, cli.positional_value("IN.bvh"), cli.up_axis("--up"));
+  const std::string& path = cli.positional_value("IN.bvh");
+  const tat::TokenFile tokens =
+      encode_file(session, prepare_for_model(path, session.model.info.fps, cli.up_axis("--up")), path);
   tat::write_tokens(cli.value("-o"), tokens);
   fmt::print("wrote {}: {} frames -> {} token steps x {} layers ({:.2f} s)\n", cli.value("-o"), tokens.frames,
              tokens.steps(), tokens.layers, seconds_since(start));
@@ -123,11 +142,10 @@ int run_decode(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const tat::TokenFile tokens = tat::read_tokens(cli.positional_value("TOKENS.json"));
-  const FootLockReport feet =
-      decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"), cli.is_set("--free-feet"),
-                  cli.value("-o"));
+  const DecodeReport report = decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"), nullptr,
+                                          cli.is_set("--free-feet"), cli.value("-o"));
   fmt::print("wrote {}: {} frames on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
-             cli.value("--skeleton"), feet_summary(feet), seconds_since(start));
+             cli.value("--skeleton"), decode_summary(report), seconds_since(start));
   return 0;
 }
 
@@ -135,24 +153,29 @@ int run_transfer(int argc, char** argv) {
   CommandLine cli("nec transfer",
                   "Move a clip onto another skeleton (any species): encode SRC.bvh to tokens with its own skeleton,\n"
                   "decode them with the target's. The output uses the target file's joint names, channels, Euler\n"
-                  "orders, units and up axis; speed scales with the target's size, the heading is the source's.");
+                  "orders, units and up axis; speed scales with the target's size; it faces where the source faces.");
   cli.positional("SRC.bvh", "the motion to transfer");
   cli.option("--to", "TARGET.bvh", "", "BVH file whose skeleton receives the motion", true);
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--up", "AXIS", "auto", "up axis of both input files: auto, y or z");
   cli.option("--tokens", "FILE", "", "also write the intermediate tokens here");
+  cli.flag("--free-heading", "keep the heading as decoded (default: turn the output slowly to face where the\n"
+                             "source faces over time, as the decoded turning drifts)");
   declare_feet_option(cli);
   declare_model_options(cli);
   cli.example("nec transfer human_wave.bvh --to dragon.bvh --model runs/tat -o dragon_wave.bvh");
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
   TokenizerSession session = open_tokenizer(tokenizer_options(cli));
-  const tat::TokenFile tokens = encode_file(session, cli.positional_value("SRC.bvh"), cli.up_axis("--up"));
-  const FootLockReport feet = decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"),
-                                          cli.is_set("--free-feet"), cli.value("-o"));
+  const std::string& path = cli.positional_value("SRC.bvh");
+  const PreparedClip source = prepare_for_model(path, session.model.info.fps, cli.up_axis("--up"));
+  const tat::TokenFile tokens = encode_file(session, source, path);
+  const DecodeReport report =
+      decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"),
+                  cli.is_set("--free-heading") ? nullptr : &source.clip, cli.is_set("--free-feet"), cli.value("-o"));
   if (!cli.value("--tokens").empty()) tat::write_tokens(cli.value("--tokens"), tokens);
-  fmt::print("wrote {}: {} frames of {} on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
-             cli.positional_value("SRC.bvh"), cli.value("--to"), feet_summary(feet), seconds_since(start));
+  fmt::print("wrote {}: {} frames of {} on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames, path,
+             cli.value("--to"), decode_summary(report), seconds_since(start));
   return 0;
 }
 

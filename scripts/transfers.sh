@@ -54,6 +54,7 @@ for pair in "${pairs[@]}"; do
   captions+=(--caption "source: $(basename "$source")" --caption "$name (skeleton of $(basename "$target"))")
 done
 "$nec" view "${files[@]}" "${captions[@]}" --max-fps 30 --title "nec transfers" -o "$out/transfers.html"
-# Speed, heading, direction, foot plants and bone lengths of each result against its source.
-"$nec" eval transfer "${files[@]}" --json "$out/transfers.json" --markdown "$out/transfers.md"
+# Speed, heading, direction, foot plants and bone lengths of each result against its source. All these files
+# are +Y up: said, so that a pose too garbled to tell (a weak model's) is not measured as Z-up.
+"$nec" eval transfer "${files[@]}" --up y --json "$out/transfers.json" --markdown "$out/transfers.md"
 echo "open $out/transfers.html; measurements in $out/transfers.md"

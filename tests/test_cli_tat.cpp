@@ -3,6 +3,8 @@
 // errors on bad input.
 #include "nec/motion/bvh.h"
 #include "nec/motion/files.h"
+#include "nec/motion/preprocess.h"
+#include "nec/motion/transfer_check.h"
 #include "nec/tat/tokens.h"
 #include "test_support.h"
 
@@ -139,8 +141,12 @@ TEST_F(CliTat, BaselinesTrainInTheSameLoop) {
     ASSERT_EQ(run.exit_code, 0) << kind << "\n" << run.output;
     const nlohmann::json config = nlohmann::json::parse(read_file(path(std::string(kind) + "/config.json")));
     EXPECT_EQ(config["tokenizer"]["kind"], kind);
-    if (std::string(kind) == "nec-vq") EXPECT_EQ(config["tokenizer"]["quantizer"]["layers"], 1);
-    if (std::string(kind) == "zero-pad-rvq") EXPECT_GT(config["tokenizer"]["max_joints"].get<int>(), 0);
+    if (std::string(kind) == "nec-vq") {
+      EXPECT_EQ(config["tokenizer"]["quantizer"]["layers"], 1);
+    }
+    if (std::string(kind) == "zero-pad-rvq") {
+      EXPECT_GT(config["tokenizer"]["max_joints"].get<int>(), 0);
+    }
   }
 }
 
@@ -178,25 +184,46 @@ TEST_F(CliTat, EncodeDecodeOntoAnotherSkeletonKeepsItsNamesAndChannels) {
   for (int j = 0; j < decoded.skeleton.joint_count(); ++j) {
     EXPECT_EQ(decoded.skeleton.names[j], target_clip.skeleton.names[j]);
     EXPECT_EQ(decoded.skeleton.channels[j].euler_order(), target_clip.skeleton.channels[j].euler_order());
-    if (j > 0) EXPECT_NEAR((decoded.skeleton.offsets[j] - target_clip.skeleton.offsets[j]).norm(), 0.0, 1e-4);
+    if (j > 0) {
+      EXPECT_NEAR((decoded.skeleton.offsets[j] - target_clip.skeleton.offsets[j]).norm(), 0.0, 1e-4);
+    }
   }
 
-  const std::string moved = path("dog_walk_transfer.bvh");
-  const CommandResult transfer = run_nec("transfer " + source + " --to " + target + " --model " + shared("tat") +
-                                         " -o " + moved + " --threads 1");
-  ASSERT_EQ(transfer.exit_code, 0) << transfer.output;
-  EXPECT_EQ(read_file(moved), read_file(out));  // transfer = encode + decode
+  const auto transfer = [&](const std::string& name, const std::string& flags) {
+    const std::string out_path = path(name);
+    const CommandResult run = run_nec("transfer " + source + " --to " + target + " --model " + shared("tat") + " -o " +
+                                      out_path + " --threads 1" + flags);
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    return out_path;
+  };
+  // transfer = encode + decode, and then turned to face as the source does.
+  EXPECT_EQ(read_file(transfer("as_decoded.bvh", " --free-heading")), read_file(out));
+  const Clip followed = read_bvh(transfer("followed.bvh", ""));
+  const Clip followed_free_feet = read_bvh(transfer("followed_free_feet.bvh", " --free-feet"));
+  const Clip free = read_bvh(transfer("free.bvh", " --free-feet --free-heading"));
+  ASSERT_EQ(followed.motion.frame_count, decoded.motion.frame_count);
+  ASSERT_EQ(free.motion.frame_count, decoded.motion.frame_count);
+  // Facing is followed by turning the root (and its path) only.
+  double largest_turn = 0.0;
+  for (int t = 0; t < free.motion.frame_count; ++t) {
+    largest_turn = std::max(largest_turn, followed_free_feet.motion.rotation(t, 0).angularDistance(free.motion.rotation(t, 0)));
+    for (int j = 1; j < free.motion.joint_count; ++j) {
+      EXPECT_LT(followed_free_feet.motion.rotation(t, j).angularDistance(free.motion.rotation(t, j)), 1e-6) << t;
+    }
+  }
+  EXPECT_GT(largest_turn, 1e-3);
+  const Clip source_clip_normalized = preprocess(source_clip, source).clip;
+  const double followed_error =
+      std::abs(check_transfer(source_clip_normalized, preprocess(followed_free_feet, "followed").clip).heading_difference);
+  const double free_error = std::abs(check_transfer(source_clip_normalized, preprocess(free, "free").clip).heading_difference);
+  std::printf("heading change error: followed %.2f, as decoded %.2f deg\n", followed_error, free_error);
+  EXPECT_LT(followed_error, 3.0);
+  EXPECT_LE(followed_error, free_error);
 
   // Feet are pinned by turning leg joints only: with --free-feet the root moves and turns the same.
-  const std::string free_feet = path("dog_walk_free_feet.bvh");
-  const CommandResult free_transfer = run_nec("transfer " + source + " --to " + target + " --model " + shared("tat") +
-                                              " -o " + free_feet + " --free-feet --threads 1");
-  ASSERT_EQ(free_transfer.exit_code, 0) << free_transfer.output;
-  const Clip free_clip = read_bvh(free_feet);
-  ASSERT_EQ(free_clip.motion.frame_count, decoded.motion.frame_count);
-  for (int t = 0; t < decoded.motion.frame_count; ++t) {
-    EXPECT_LT((free_clip.motion.translation(t, 0) - decoded.motion.translation(t, 0)).norm(), 1e-9) << t;
-    EXPECT_LT(free_clip.motion.rotation(t, 0).angularDistance(decoded.motion.rotation(t, 0)), 1e-9) << t;
+  for (int t = 0; t < followed.motion.frame_count; ++t) {
+    EXPECT_LT((followed.motion.translation(t, 0) - followed_free_feet.motion.translation(t, 0)).norm(), 1e-9) << t;
+    EXPECT_LT(followed.motion.rotation(t, 0).angularDistance(followed_free_feet.motion.rotation(t, 0)), 1e-9) << t;
   }
 }
 
