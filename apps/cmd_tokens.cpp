@@ -45,12 +45,12 @@ tat::TokenFile encode_file(TokenizerSession& session, const PreparedClip& source
 
 // What decode_onto did after decoding.
 struct DecodeReport {
-  std::optional<HeadingReport> heading;  // turned to follow a source's facing
+  std::optional<HeadingReport> heading;  // steered to follow a source's facing and path
   FootLockReport feet;
 };
 
-// Decodes tokens onto the skeleton of `target_path`, turns it to face where `heading_source` faces frame by
-// frame (when given: the clip the tokens came from, prepared for the model), pins the feet it puts down unless
+// Decodes tokens onto the skeleton of `target_path`, steers it to face and go where `heading_source` does
+// (when given: the clip the tokens came from, prepared for the model), pins the feet it puts down unless
 // `free_feet`, and writes OUT.bvh in that file's units, up axis, joint names, channels and Euler orders.
 DecodeReport decode_onto(TokenizerSession& session, const tat::TokenFile& tokens, const std::string& target_path,
                          UpAxis up, const Clip* heading_source, bool free_feet, const std::string& out_path) {
@@ -88,8 +88,9 @@ void declare_feet_option(CommandLine& cli) {
 std::string decode_summary(const DecodeReport& report) {
   std::string out;
   if (report.heading) {
-    out += fmt::format("; turned to face as the source does ({:.1f}° on average, {:.1f}° at most)",
-                       report.heading->mean_turn, report.heading->max_turn);
+    out += fmt::format("; steered to face and go as the source does (body turned {:.1f}° on average, {:.1f}° at "
+                       "most; path {:.1f}° at most)",
+                       report.heading->mean_turn, report.heading->max_turn, report.heading->max_path_turn);
   }
   const FootLockReport& feet = report.feet;
   if (feet.feet > 0) {
@@ -153,14 +154,14 @@ int run_transfer(int argc, char** argv) {
   CommandLine cli("nec transfer",
                   "Move a clip onto another skeleton (any species): encode SRC.bvh to tokens with its own skeleton,\n"
                   "decode them with the target's. The output uses the target file's joint names, channels, Euler\n"
-                  "orders, units and up axis; speed scales with the target's size; it faces where the source faces.");
+                  "orders, units and up axis; speed scales with the target's size; it faces and goes where the source does.");
   cli.positional("SRC.bvh", "the motion to transfer");
   cli.option("--to", "TARGET.bvh", "", "BVH file whose skeleton receives the motion", true);
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--up", "AXIS", "auto", "up axis of both input files: auto, y or z");
   cli.option("--tokens", "FILE", "", "also write the intermediate tokens here");
-  cli.flag("--free-heading", "keep the heading as decoded (default: turn the output slowly to face where the\n"
-                             "source faces over time, as the decoded turning drifts)");
+  cli.flag("--free-heading", "keep heading and path as decoded (default: turn the output's body and path slowly\n"
+                             "to face and go where the source does over time, as the decoded turning drifts)");
   declare_feet_option(cli);
   declare_model_options(cli);
   cli.example("nec transfer human_wave.bvh --to dragon.bvh --model runs/tat -o dragon_wave.bvh");

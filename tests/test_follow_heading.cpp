@@ -1,7 +1,9 @@
 // Heading following on motion whose truth is known: a zoo walk that drifts off
 // its source's heading is turned back onto it, a walk turned away rigidly comes
-// back to the source exactly (up to where it stands), turns of the source are
-// taken over, a body's own sway is kept, and nothing below the root changes.
+// back to the source exactly (up to where it stands), a body turned away from
+// its path and a path bent away from its body are each steered back, turns of
+// the source are taken over, a body's own sway is kept, and nothing below the
+// root changes.
 #include "nec/motion/follow_heading.h"
 #include "nec/motion/kinematics.h"
 #include "nec/motion/preprocess.h"
@@ -15,6 +17,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 namespace nec {
 namespace {
@@ -95,6 +99,51 @@ TEST(FollowHeading, AWalkTurnedAwayRigidlyComesBackToItsSource) {
   for (size_t i = 0; i < a.positions.size(); ++i) ASSERT_LT((b.positions[i] - a.positions[i] - shift).norm(), 1e-9);
 }
 
+// The walk with its body turned by `body_degrees` and its path bent by `path_degrees`, both growing
+// linearly from 0 at frame 0 to the given angle at the last frame (+ = left).
+Clip bent(const Clip& walk, double body_degrees, double path_degrees) {
+  Clip out = walk;
+  const int frames = walk.motion.frame_count;
+  for (int t = 0; t < frames; ++t) {
+    const double share = static_cast<double>(t) / (frames - 1);
+    out.motion.rotation(t, 0) = axis_rotation(1, share * body_degrees) * walk.motion.rotation(t, 0);
+    if (t > 0) {
+      out.motion.translation(t, 0) =
+          out.motion.translation(t - 1, 0) +
+          axis_rotation(1, share * path_degrees) * (walk.motion.translation(t, 0) - walk.motion.translation(t - 1, 0));
+    }
+  }
+  return out;
+}
+
+double largest_root_distance(const Clip& a, const Clip& b) {
+  double largest = 0.0;
+  for (int t = 0; t < a.motion.frame_count; ++t) {
+    largest = std::max(largest, (a.motion.translation(t, 0) - b.motion.translation(t, 0)).norm());
+  }
+  return largest / a.skeleton.diameter();
+}
+
+TEST(FollowHeading, BodyAndPathAreSteeredEachOnItsOwn) {
+  const Clip source = zoo_walk(zoo::BodyPlan::Biped, 0.0);
+  // A body that turns away while its path goes straight on (decoded human walks do), and a path that bends
+  // away under a body that keeps facing ahead.
+  for (const auto& [body, path] : std::vector<std::pair<double, double>>{{-30.0, 0.0}, {0.0, -30.0}}) {
+    Clip output = bent(source, body, path);
+    const double path_off = largest_root_distance(source, output);
+    const double facing_off = largest_heading_difference(source, output);
+    const HeadingReport report = follow_heading(source, output.skeleton, output.motion);
+    std::printf("body %+.0f, path %+.0f: root off by %.3f -> %.4f sizes, facing by %.1f -> %.2f deg; turned body "
+                "%.1f, path %.1f at most\n",
+                body, path, path_off, largest_root_distance(source, output), facing_off,
+                largest_heading_difference(source, output), report.max_turn, report.max_path_turn);
+    EXPECT_LT(largest_root_distance(source, output), 0.01);
+    EXPECT_LT(largest_heading_difference(source, output), 0.5);
+    EXPECT_NEAR(report.max_turn, std::abs(body), 1.0);
+    EXPECT_NEAR(report.max_path_turn, std::abs(path), 1.0);
+  }
+}
+
 TEST(FollowHeading, AMotionThatAlreadyFollowsKeepsItsSway) {
   // The same walk: its facing sways step by step and nothing is turned.
   const Clip source = zoo_walk(zoo::BodyPlan::Biped, 0.0);
@@ -119,9 +168,12 @@ TEST(FollowHeading, MismatchedClipsAndBadOptionsThrow) {
   EXPECT_THROW(follow_heading(source, output.skeleton, faster), std::invalid_argument);
   const Clip other = zoo_walk(zoo::BodyPlan::Quadruped, 0.0);
   EXPECT_THROW(follow_heading(source, other.skeleton, output.motion), std::invalid_argument);
-  HeadingOptions options;
-  options.smoothing_seconds = 0.0;
-  EXPECT_THROW(follow_heading(source, output.skeleton, output.motion, options), std::invalid_argument);
+  HeadingOptions no_window;
+  no_window.smoothing_seconds = 0.0;
+  EXPECT_THROW(follow_heading(source, output.skeleton, output.motion, no_window), std::invalid_argument);
+  HeadingOptions never_still;
+  never_still.still_speed = -1.0;
+  EXPECT_THROW(follow_heading(source, output.skeleton, output.motion, never_still), std::invalid_argument);
 }
 
 }  // namespace

@@ -13,29 +13,42 @@
 namespace nec {
 namespace {
 
-// Least-squares line through the values of a centred window of `width` frames (odd), read at its centre:
-// the centred moving average inside the clip; near the ends, where the window is cut short, a trend is
-// followed to the last frame instead of flattened.
-std::vector<double> moving_line(const std::vector<double>& values, int width) {
+// Weighted least-squares line through the values of a centred window of `width` frames (odd), read at its
+// centre: with equal weights the centred moving average inside the clip; near the ends, where the window is
+// cut short, a trend is followed to the last frame instead of flattened. Weights must be positive.
+std::vector<double> moving_line(const std::vector<double>& values, const std::vector<double>& weights, int width) {
   const int n = static_cast<int>(values.size()), half = width / 2;
-  std::vector<double> sum_v(n + 1, 0.0), sum_tv(n + 1, 0.0);
-  for (int t = 0; t < n; ++t) {
-    sum_v[t + 1] = sum_v[t] + values[t];
-    sum_tv[t + 1] = sum_tv[t] + t * values[t];
-  }
   std::vector<double> out(values.size());
   for (int t = 0; t < n; ++t) {
-    const int begin = std::max(0, t - half), end = std::min(n, t + half + 1);
-    const double count = end - begin, mean_t = 0.5 * (begin + end - 1);
-    const double mean_v = (sum_v[end] - sum_v[begin]) / count;
-    // Σ (t' - mean_t)² over the window's frames: count (count² - 1) / 12.
-    const double spread = count * (count * count - 1.0) / 12.0;
-    const double slope =
-        spread > 0.0 ? (sum_tv[end] - sum_tv[begin] - mean_t * (sum_v[end] - sum_v[begin])) / spread : 0.0;
-    out[t] = mean_v + slope * (t - mean_t);
+    double w = 0.0, wx = 0.0, wxx = 0.0, wv = 0.0, wxv = 0.0;  // x: frames from t
+    for (int u = std::max(0, t - half); u < std::min(n, t + half + 1); ++u) {
+      const double x = u - t;
+      w += weights[u];
+      wx += weights[u] * x;
+      wxx += weights[u] * x * x;
+      wv += weights[u] * values[u];
+      wxv += weights[u] * x * values[u];
+    }
+    const double mean_x = wx / w, mean_v = wv / w, spread = wxx - w * mean_x * mean_x;
+    const double slope = spread > 1e-12 * w ? (wxv - w * mean_x * mean_v) / spread : 0.0;
+    out[t] = mean_v - slope * mean_x;
   }
   return out;
 }
+
+std::vector<double> smooth(const std::vector<double>& values, const std::vector<double>& weights, int width) {
+  return moving_line(moving_line(values, weights, width), weights, width);
+}
+
+// Root step from the frame before, horizontal, in body sizes; zero at frame 0.
+Vec3 root_step(const Motion& motion, int t, double size) {
+  if (t == 0) return Vec3::Zero();
+  const Vec3 step = (motion.translation(t, 0) - motion.translation(t - 1, 0)) / size;
+  return Vec3(step.x(), 0.0, step.z());
+}
+
+// Heading (degrees about +Y, + = left, 0 = +Z) of a horizontal vector.
+double heading_of(const Vec3& v) { return std::atan2(v.x(), v.z()) * 180.0 / 3.14159265358979323846; }
 
 }  // namespace
 
@@ -43,6 +56,9 @@ void HeadingOptions::validate() const {
   if (!(smoothing_seconds > 0.0)) {
     throw std::invalid_argument("HeadingOptions: smoothing_seconds must be > 0, got " +
                                 std::to_string(smoothing_seconds));
+  }
+  if (!(still_speed > 0.0)) {
+    throw std::invalid_argument("HeadingOptions: still_speed must be > 0, got " + std::to_string(still_speed));
   }
 }
 
@@ -71,19 +87,39 @@ HeadingReport follow_heading(const Clip& source, const Skeleton& skeleton, Motio
   const double whole_turns = 360.0 * std::round(difference[0] / 360.0);
   for (double& d : difference) d -= whole_turns;
   const int width = 2 * static_cast<int>(std::lround(0.5 * options.smoothing_seconds * motion.fps)) + 1;
-  const std::vector<double> turn = moving_line(moving_line(difference, width), width);
+  const std::vector<double> body_turn = smooth(difference, std::vector<double>(frames, 1.0), width);
+
+  // The path's turn: per frame, the angle from the output's step to the source's (the representative nearest
+  // the body's turn), weighted by the product of their lengths; where either stands still the body's turn
+  // takes over (it weighs as much as a pair of steps at still_speed).
+  const double still_step = options.still_speed / motion.fps;
+  const double prior = still_step * still_step;
+  std::vector<double> path_difference(frames), path_weight(frames);
+  for (int t = 0; t < frames; ++t) {
+    const Vec3 wanted_step = root_step(source.motion, t, source.skeleton.diameter());
+    const Vec3 step = root_step(motion, t, skeleton.diameter());
+    const double weight = wanted_step.norm() * step.norm();
+    double angle = body_turn[t];
+    if (weight > 0.0) {
+      angle = heading_of(wanted_step) - heading_of(step);
+      angle -= 360.0 * std::round((angle - body_turn[t]) / 360.0);
+    }
+    path_weight[t] = weight + prior;
+    path_difference[t] = (weight * angle + prior * body_turn[t]) / path_weight[t];
+  }
+  const std::vector<double> path_turn = smooth(path_difference, path_weight, width);
 
   HeadingReport report;
-  Vec3 previous_source = motion.translation(0, 0);
+  Vec3 previous = motion.translation(0, 0);
   for (int t = 0; t < frames; ++t) {
-    const Quat yaw = axis_rotation(1, turn[t]);
     Vec3& position = motion.translation(t, 0);
-    const Vec3 step = position - previous_source;
-    previous_source = position;
-    if (t > 0) position = motion.translation(t - 1, 0) + yaw * step;
-    motion.rotation(t, 0) = (yaw * motion.rotation(t, 0)).normalized();
-    report.mean_turn += std::abs(turn[t]) / frames;
-    report.max_turn = std::max(report.max_turn, std::abs(turn[t]));
+    const Vec3 step = position - previous;
+    previous = position;
+    if (t > 0) position = motion.translation(t - 1, 0) + axis_rotation(1, path_turn[t]) * step;
+    motion.rotation(t, 0) = (axis_rotation(1, body_turn[t]) * motion.rotation(t, 0)).normalized();
+    report.mean_turn += std::abs(body_turn[t]) / frames;
+    report.max_turn = std::max(report.max_turn, std::abs(body_turn[t]));
+    report.max_path_turn = std::max(report.max_path_turn, std::abs(path_turn[t]));
   }
   return report;
 }
