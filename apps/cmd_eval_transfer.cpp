@@ -18,10 +18,18 @@ namespace {
 
 using nlohmann::json;
 
-Clip prepared(const std::string& path, UpAxis up) {
+PreparedClip prepared(const std::string& path, UpAxis up) {
   PreprocessOptions options;
   options.up = up;  // resampled to the corpus rate, +Y up, unit diameter: both files measured alike
-  return preprocess_file(path, options).clip;
+  return preprocess_file(path, options);
+}
+
+// The output of a transfer onto the source's own skeleton, in the source's normalized frame (both files are
+// in one frame then: the output has the source's heading and place), so that their joints can be compared;
+// any other output as preprocessing leaves it.
+Clip output_to_measure(const PreparedClip& source, const PreparedClip& output) {
+  if (source.clip.skeleton.names != output.clip.skeleton.names) return output.clip;
+  return renormalize(output.clip, output.normalization, source.normalization);
 }
 
 // NaN (no direction, a source standing still) is JSON null and "-" in the table.
@@ -51,8 +59,9 @@ int run_eval_transfer(int argc, char** argv) {
                   "in its own body sizes (skeleton diameters): root speed and their ratio (1 = as many body sizes per\n"
                   "second), heading change, direction of travel against the facing (0 = forward), feet that plant\n"
                   "(leaf joints near the floor and nearly still) with touchdowns per second, foot skate (how fast leaf\n"
-                  "joints near the floor move), and the largest bone-length change of the output. Both files are\n"
-                  "resampled to 30 fps with +Y up before measuring.");
+                  "joints near the floor move), the largest bone-length change of the output, and, when both have one\n"
+                  "skeleton (a transfer onto the source's own), the mean distance between their joints in the files'\n"
+                  "frame. Both files are resampled to 30 fps with +Y up before measuring.");
   cli.positional("PAIRS", "SRC.bvh OUT.bvh [SRC.bvh OUT.bvh ...]", true, true);
   cli.option("--up", "AXIS", "auto", "up axis of the files: auto, y or z");
   cli.option("--json", "OUT.json", "", "also write the results as JSON");
@@ -66,24 +75,26 @@ int run_eval_transfer(int argc, char** argv) {
   json results = json::array();
   std::string table =
       "| source | output | speed src / out (sizes/s) | ratio | heading change src / out (deg) | direction src / out (deg) "
-      "| feet src / out | touchdowns/s src / out | foot skate src / out (sizes/s) | bone change |\n"
-      "|---|---|---|---|---|---|---|---|---|---|\n";
+      "| feet src / out | touchdowns/s src / out | foot skate src / out (sizes/s) | bone change | joint distance |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < files.size(); i += 2) {
-    const TransferCheck c = check_transfer(prepared(files[i], up), prepared(files[i + 1], up));
+    const PreparedClip source = prepared(files[i], up);
+    const TransferCheck c = check_transfer(source.clip, output_to_measure(source, prepared(files[i + 1], up)));
     results.push_back({{"source", files[i]},
                        {"output", files[i + 1]},
                        {"speed_ratio", number(c.speed_ratio)},
                        {"heading_difference_deg", c.heading_difference},
                        {"direction_difference_deg", number(c.direction_difference)},
+                       {"joint_distance", number(c.joint_distance)},
                        {"source_measurements", measurements_json(c.source)},
                        {"output_measurements", measurements_json(c.output)}});
-    table += fmt::format("| {} | {} | {:.3f} / {:.3f} | {} | {:.1f} / {:.1f} | {} / {} | {} / {} | {:.2f} / {:.2f} | {} / {} | {:.2g} |\n",
+    table += fmt::format("| {} | {} | {:.3f} / {:.3f} | {} | {:.1f} / {:.1f} | {} / {} | {} / {} | {:.2f} / {:.2f} | {} / {} | {:.2g} | {} |\n",
                          files[i], files[i + 1], c.source.speed, c.output.speed, cell(c.speed_ratio, "{:.2f}"),
                          c.source.heading_change, c.output.heading_change, cell(c.source.travel_direction, "{:.0f}"),
                          cell(c.output.travel_direction, "{:.0f}"), c.source.gait.feet, c.output.gait.feet,
                          c.source.gait.touchdowns_per_second, c.output.gait.touchdowns_per_second,
                          cell(c.source.gait.skate, "{:.2f}"), cell(c.output.gait.skate, "{:.2f}"),
-                         c.output.bone_length_change);
+                         c.output.bone_length_change, cell(c.joint_distance, "{:.3f}"));
   }
   fmt::print("{}", table);
   if (!cli.value("--json").empty()) write_file_atomic(cli.value("--json"), results.dump(1) + "\n");

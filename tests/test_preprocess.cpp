@@ -74,6 +74,31 @@ TEST(Preprocess, DenormalizeRestoresTheOriginal) {
   EXPECT_LT(diff, 1e-9) << "max difference " << diff;
 }
 
+TEST(Preprocess, RenormalizePutsAClipIntoAnotherClipsFrame) {
+  PreprocessOptions keep_rate;
+  keep_rate.target_fps = 0.0;
+  // Two files in one frame: a walk, and the same walk turned by 40° about +Y and moved. Each normalizes to
+  // the same clip; put back into the first one's frame, the second is the first turned and moved there.
+  const Clip first = walking_biped();
+  Clip second = first;
+  transform_clip(second, axis_rotation(1, 40.0), 1.0, Vec3(3.0, 0.0, -2.0));
+  const PreparedClip a = preprocess(first, "a.bvh", keep_rate), b = preprocess(second, "b.bvh", keep_rate);
+  const Clip same = renormalize(a.clip, a.normalization, a.normalization);
+  const Clip moved = renormalize(b.clip, b.normalization, a.normalization);
+  const Pose in_a = forward_kinematics(a.clip.skeleton, a.clip.motion);
+  EXPECT_LT(testing::max_position_difference(in_a.positions,
+                                             forward_kinematics(same.skeleton, same.motion).positions), 1e-9);
+  // Expected: the second file's joints normalized the way the first file was.
+  const Pose raw = forward_kinematics(second.skeleton, second.motion);
+  std::vector<Vec3> wanted;
+  for (const Vec3& x : raw.positions) {
+    wanted.push_back(a.normalization.rotation.conjugate() * (x - a.normalization.origin) / a.normalization.scale);
+  }
+  const double diff = testing::max_position_difference(wanted, forward_kinematics(moved.skeleton, moved.motion).positions);
+  EXPECT_LT(diff, 1e-9) << "max difference " << diff;
+  EXPECT_GT(testing::max_position_difference(in_a.positions, wanted), 0.1);
+}
+
 TEST(Preprocess, HeadingAndUpAxisInvariance) {
   // The same clip turned about Y, or stored Z-up, normalizes to the same motion.
   const PreparedClip reference = preprocess(walking_biped(), "a.bvh");

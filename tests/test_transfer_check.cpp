@@ -1,6 +1,7 @@
 // Transfer checks on zoo motion whose truth is known: speed, turning, direction,
-// foot plants in the gait's rhythm, bone lengths; and what a broken transfer
-// (frozen root, stretched bone) looks like.
+// foot plants in the gait's rhythm, bone lengths, the distance between clips on
+// one skeleton; and what a broken transfer (frozen root, stretched bone) looks
+// like.
 #include "nec/motion/bvh.h"
 #include "nec/motion/preprocess.h"
 #include "nec/motion/transfer_check.h"
@@ -77,6 +78,9 @@ TEST(TransferCheck, AClipCheckedAgainstItselfMatches) {
   EXPECT_DOUBLE_EQ(check.speed_ratio, 1.0);
   EXPECT_DOUBLE_EQ(check.heading_difference, 0.0);
   EXPECT_DOUBLE_EQ(check.direction_difference, 0.0);
+  EXPECT_DOUBLE_EQ(check.joint_distance, 0.0);
+  // Joint distance needs one skeleton.
+  EXPECT_TRUE(std::isnan(check_transfer(w.clip, walk(zoo::BodyPlan::Quadruped).clip).joint_distance));
 }
 
 TEST(TransferCheck, AFrozenRootAndAStretchedBoneShow) {
@@ -93,6 +97,14 @@ TEST(TransferCheck, AFrozenRootAndAStretchedBoneShow) {
   EXPECT_TRUE(std::isnan(check.direction_difference));
   EXPECT_NEAR(check.output.bone_length_change, 0.1, 1e-9);
   EXPECT_LT(check.output.gait.touchdowns_per_second, check.source.gait.touchdowns_per_second);
+  // Every joint of the frozen clip is off by the distance the root travelled (one bone in one frame aside).
+  double travelled = 0.0;
+  for (int t = 0; t < w.clip.motion.frame_count; ++t) {
+    travelled += (w.clip.motion.translation(t, 0) - w.clip.motion.translation(0, 0)).norm();
+  }
+  travelled /= w.clip.motion.frame_count * w.clip.skeleton.diameter();
+  EXPECT_GT(travelled, 0.5);
+  EXPECT_NEAR(check.joint_distance, travelled, 1e-3);
 }
 
 // A body that outruns its legs: the planted feet slide, which foot skate shows and touchdowns lose.

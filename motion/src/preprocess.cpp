@@ -269,6 +269,13 @@ Clip denormalize(const Clip& normalized, const Normalization& normalization) {
   return out;
 }
 
+Clip renormalize(const Clip& normalized, const Normalization& from, const Normalization& to) {
+  Clip out = denormalize(normalized, from);
+  const Quat back = to.rotation.conjugate();
+  transform_clip(out, back, 1.0 / to.scale, -(back * to.origin) / to.scale);
+  return out;
+}
+
 PreparedClip preprocess(const Clip& raw, const std::string& file, const PreprocessOptions& options) {
   PreparedClip out;
   out.clip = raw;

@@ -62,6 +62,19 @@ GaitMeasurements measure_gait(const Clip& clip, double size) {
   return gait;
 }
 
+// TransferCheck::joint_distance.
+double joint_distance(const Clip& source, const Clip& output) {
+  if (source.skeleton.names != output.skeleton.names ||
+      source.motion.frame_count != output.motion.frame_count) {
+    return kNaN;
+  }
+  const Pose a = forward_kinematics(source.skeleton, source.motion);
+  const Pose b = forward_kinematics(output.skeleton, output.motion);
+  double sum = 0.0;
+  for (size_t i = 0; i < a.positions.size(); ++i) sum += (a.positions[i] - b.positions[i]).norm();
+  return sum / static_cast<double>(a.positions.size()) / source.skeleton.diameter();
+}
+
 }  // namespace
 
 MotionMeasurements measure_motion(const Clip& clip) {
@@ -109,6 +122,7 @@ TransferCheck check_transfer(const Clip& source, const Clip& output) {
   check.direction_difference = std::isnan(check.source.travel_direction) || std::isnan(check.output.travel_direction)
                                    ? kNaN
                                    : wrapped_difference(check.output.travel_direction, check.source.travel_direction);
+  check.joint_distance = joint_distance(source, output);
   return check;
 }
 

@@ -75,6 +75,9 @@ Motion resample(const Motion& motion, double fps);
 void transform_clip(Clip& clip, const Quat& rotation, double scale, const Vec3& origin);
 // Undoes preprocess's scale, axes and heading (not the resampling).
 Clip denormalize(const Clip& normalized, const Normalization& normalization);
+// A clip normalized by `from`, put into the normalized frame of another clip of the same file frame (`to`):
+// compares two files in one frame, e.g. a transfer onto its source's own skeleton with that source.
+Clip renormalize(const Clip& normalized, const Normalization& from, const Normalization& to);
 
 // The decoder's side of step 6. Tokens hold no start heading (tat/model_space.h): this turns a decoded
 // clip's body (turn_body: not its path) so that frame 0 faces +Z as preprocessing judges it, from the

@@ -54,6 +54,10 @@ struct TransferCheck {
   double speed_ratio = 0.0;          // output.speed / source.speed; NaN if the source stands still
   double heading_difference = 0.0;   // output - source heading change, degrees
   double direction_difference = 0.0; // output - source travel direction, degrees in (-180, 180]; NaN if either has none
+  // Mean distance between the two clips' joints over frames, root trajectory included, in the source's body
+  // sizes: only when both have the same skeleton (joint names in the same order) and frame count, as a
+  // transfer onto the source's own skeleton does; NaN otherwise.
+  double joint_distance = 0.0;
 };
 
 TransferCheck check_transfer(const Clip& source, const Clip& output);
