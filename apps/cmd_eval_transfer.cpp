@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -24,12 +25,14 @@ PreparedClip prepared(const std::string& path, UpAxis up) {
   return preprocess_file(path, options);
 }
 
-// The output of a transfer onto the source's own skeleton, in the source's normalized frame (both files are
-// in one frame then: the output has the source's heading and place), so that their joints can be compared;
-// any other output as preprocessing leaves it.
-Clip output_to_measure(const PreparedClip& source, const PreparedClip& output) {
-  if (source.clip.skeleton.names != output.clip.skeleton.names) return output.clip;
-  return renormalize(output.clip, output.normalization, source.normalization);
+// Whether the output of a transfer is on the source's own skeleton, in a file with the same units and up
+// axis: then both files are in one frame (the output has the source's heading and place) and their joints can
+// be compared; turning and moving the output there changes none of the other measures.
+bool in_one_frame(const PreparedClip& source, const PreparedClip& output) {
+  const Normalization &a = source.normalization, &b = output.normalization;
+  const Vec3 up = (a.rotation.conjugate() * b.rotation) * Vec3::UnitY();
+  return source.clip.skeleton.names == output.clip.skeleton.names && up.y() > 0.999 &&
+         std::abs(a.scale - b.scale) <= 1e-6 * a.scale;
 }
 
 // NaN (no direction, a source standing still) is JSON null and "-" in the table.
@@ -78,8 +81,11 @@ int run_eval_transfer(int argc, char** argv) {
       "| feet src / out | touchdowns/s src / out | foot skate src / out (sizes/s) | bone change | joint distance |\n"
       "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < files.size(); i += 2) {
-    const PreparedClip source = prepared(files[i], up);
-    const TransferCheck c = check_transfer(source.clip, output_to_measure(source, prepared(files[i + 1], up)));
+    const PreparedClip source = prepared(files[i], up), output = prepared(files[i + 1], up);
+    const bool comparable = in_one_frame(source, output);
+    TransferCheck c = check_transfer(
+        source.clip, comparable ? renormalize(output.clip, output.normalization, source.normalization) : output.clip);
+    if (!comparable) c.joint_distance = std::numeric_limits<double>::quiet_NaN();
     results.push_back({{"source", files[i]},
                        {"output", files[i + 1]},
                        {"speed_ratio", number(c.speed_ratio)},

@@ -109,6 +109,12 @@ TEST_F(Cli, EvalTransferComparesPairsInBodySizes) {
   EXPECT_NEAR(check["heading_difference_deg"].get<double>(), 0.0, 1.0);
   EXPECT_LT(check["output_measurements"]["bone_length_change"].get<double>(), 1e-3);
   EXPECT_GT(check["source_measurements"]["speed"].get<double>(), 0.1);
+  // Another unit: the two files are not in one frame, so their joints are not compared.
+  EXPECT_TRUE(check["joint_distance"].is_null()) << check.dump(1);
+  // The clip against itself is in one frame: its joints are where they are.
+  const CommandResult itself = run_nec("eval transfer " + kCmu + " " + kCmu + " --json " + json_path);
+  ASSERT_EQ(itself.exit_code, 0) << itself.output;
+  EXPECT_NEAR(nlohmann::json::parse(read_file(json_path)).at(0)["joint_distance"].get<double>(), 0.0, 1e-12);
 
   const CommandResult odd = run_nec("eval transfer " + kCmu);
   EXPECT_EQ(odd.exit_code, 2);
