@@ -63,8 +63,8 @@ int run_eval_transfer(int argc, char** argv) {
                   "second), heading change, direction of travel against the facing (0 = forward), feet that plant\n"
                   "(leaf joints near the floor and nearly still) with touchdowns per second, foot skate (how fast leaf\n"
                   "joints near the floor move), the largest bone-length change of the output, and, when both have one\n"
-                  "skeleton (a transfer onto the source's own), the mean distance between their joints in the files'\n"
-                  "frame. Both files are resampled to 30 fps with +Y up before measuring.");
+                  "skeleton, units and up axis (a transfer onto the source itself), the mean distance between their\n"
+                  "joints in the files' frame. Both files are resampled to 30 fps with +Y up before measuring.");
   cli.positional("PAIRS", "SRC.bvh OUT.bvh [SRC.bvh OUT.bvh ...]", true, true);
   cli.option("--up", "AXIS", "auto", "up axis of the files: auto, y or z");
   cli.option("--json", "OUT.json", "", "also write the results as JSON");

@@ -1,4 +1,4 @@
-// Heading following: turn a transferred motion to face where its source faced.
+// Heading following: steer a transferred motion to face and go where its source does.
 #include "nec/motion/follow_heading.h"
 
 #include "nec/motion/rotations.h"
