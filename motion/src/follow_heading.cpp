@@ -48,7 +48,7 @@ Vec3 root_step(const Motion& motion, int t, double size) {
 }
 
 // Heading (degrees about +Y, + = left, 0 = +Z) of a horizontal vector.
-double heading_of(const Vec3& v) { return std::atan2(v.x(), v.z()) * 180.0 / 3.14159265358979323846; }
+double heading_of(const Vec3& v) { return std::atan2(v.x(), v.z()) * kDegreesPerRadian; }
 
 }  // namespace
 

@@ -325,8 +325,8 @@ PreparedClip preprocess(const Clip& raw, const std::string& file, const Preproce
   Quat heading_fix = Quat::Identity();
   if (frame0_forward(clip, forward, how)) {
     const double yaw = std::atan2(forward.x(), forward.z());  // angle from +Z towards +X
-    heading_fix = axis_rotation(1, -yaw * 180.0 / M_PI);
-    report.changes.push_back(fmt::format("turned by {:.1f} degrees so frame 0 faces +Z ({})", -yaw * 180.0 / M_PI, how));
+    heading_fix = axis_rotation(1, -yaw * kDegreesPerRadian);
+    report.changes.push_back(fmt::format("turned by {:.1f} degrees so frame 0 faces +Z ({})", -yaw * kDegreesPerRadian, how));
   } else {
     report.changes.push_back("kept the heading: no left/right joints, travel or head to find where it faces");
   }

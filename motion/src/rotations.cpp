@@ -8,8 +8,6 @@
 namespace nec {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 constexpr std::array<std::array<int, 3>, 6> kOrderAxes = {{
     {0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
@@ -41,7 +39,7 @@ EulerOrder euler_order_from_axes(const std::array<int, 3>& axes) {
 }
 
 Quat axis_rotation(int axis, double degrees) {
-  const double half = 0.5 * degrees * kDegToRad;
+  const double half = 0.5 * degrees / kDegreesPerRadian;
   Quat q(std::cos(half), 0.0, 0.0, 0.0);
   q.coeffs()[axis] = std::sin(half);  // coeffs() is (x, y, z, w)
   return q;
@@ -74,7 +72,7 @@ Vec3 matrix_to_euler(const Mat3& r, EulerOrder order) {
     t2 = 0.0;
     t0 = std::atan2(sign * r(c, b), r(b, b));
   }
-  return {t0 * kRadToDeg, t1 * kRadToDeg, t2 * kRadToDeg};
+  return {t0 * kDegreesPerRadian, t1 * kDegreesPerRadian, t2 * kDegreesPerRadian};
 }
 
 Vec3 quat_to_euler(const Quat& q, EulerOrder order) {

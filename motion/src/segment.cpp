@@ -13,8 +13,6 @@
 namespace nec {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegrees = 180.0 / kPi;
 
 int frames_of(double seconds, double fps) { return std::max(1, static_cast<int>(std::lround(seconds * fps))); }
 
@@ -146,7 +144,7 @@ std::vector<double> unwrapped_heading(const std::vector<Vec3>& facing) {
       heading[t] = previous;
       continue;
     }
-    const double angle = std::atan2(facing[t].x(), facing[t].z()) * kDegrees;
+    const double angle = std::atan2(facing[t].x(), facing[t].z()) * kDegreesPerRadian;
     heading[t] = have ? previous + std::remainder(angle - previous, 360.0) : angle;
     previous = heading[t];
     have = true;
@@ -795,7 +793,7 @@ KinematicSignals measure_kinematics(const Clip& take, const SegmentOptions& opti
     const Vec3 velocity = centred_rate<Vec3>(t, frame_count, velocity_half, fps, [&](int i) { return root(i); }) / body;
     const Vec3 flat = horizontal(velocity);
     s.speed[t] = flat.norm();
-    const double angle = s.heading[t] / kDegrees;
+    const double angle = s.heading[t] / kDegreesPerRadian;
     const Vec3 forward(std::sin(angle), 0.0, std::cos(angle));
     const Vec3 left(std::cos(angle), 0.0, -std::sin(angle));  // up × forward
     s.forward_speed[t] = flat.dot(forward);
@@ -812,7 +810,7 @@ KinematicSignals measure_kinematics(const Clip& take, const SegmentOptions& opti
     if (layout.chest >= 0) {
       const Vec3 trunk = pose.position(t, layout.chest) - root(t);
       const double length = trunk.norm();
-      if (length > 1e-12) s.trunk_pitch[t] = std::asin(std::clamp(trunk.y() / length, -1.0, 1.0)) * kDegrees;
+      if (length > 1e-12) s.trunk_pitch[t] = std::asin(std::clamp(trunk.y() / length, -1.0, 1.0)) * kDegreesPerRadian;
     }
     if (frame_count > 1) {
       const int a = t + 1 < frame_count ? t : t - 1;

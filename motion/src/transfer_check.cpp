@@ -15,7 +15,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-constexpr double kDegreesPerRadian = 180.0 / M_PI;
 
 // Angle a - b wrapped into (-180, 180].
 double wrapped_difference(double a, double b) {
@@ -68,11 +67,12 @@ double joint_distance(const Clip& source, const Clip& output) {
       source.motion.frame_count != output.motion.frame_count) {
     return kNaN;
   }
-  const Pose a = forward_kinematics(source.skeleton, source.motion);
-  const Pose b = forward_kinematics(output.skeleton, output.motion);
+  std::vector<Vec3> a, b;
+  joint_positions(source.skeleton, source.motion, a);
+  joint_positions(output.skeleton, output.motion, b);
   double sum = 0.0;
-  for (size_t i = 0; i < a.positions.size(); ++i) sum += (a.positions[i] - b.positions[i]).norm();
-  return sum / static_cast<double>(a.positions.size()) / source.skeleton.diameter();
+  for (size_t i = 0; i < a.size(); ++i) sum += (a[i] - b[i]).norm();
+  return sum / static_cast<double>(a.size()) / source.skeleton.diameter();
 }
 
 }  // namespace

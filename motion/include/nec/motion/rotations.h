@@ -24,6 +24,8 @@ using Mat3 = Eigen::Matrix3d;
 using Quat = Eigen::Quaterniond;
 using Rot6 = std::array<double, 6>;  // first two columns of R: (r00, r10, r20, r01, r11, r21)
 
+inline constexpr double kDegreesPerRadian = 180.0 / 3.14159265358979323846;
+
 enum class EulerOrder : unsigned char { XYZ, XZY, YXZ, YZX, ZXY, ZYX };
 
 // Axis indices (0 = X, 1 = Y, 2 = Z) of an order, in application order.
