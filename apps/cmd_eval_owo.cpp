@@ -141,14 +141,9 @@ int run_eval_owo(int argc, char** argv) {
   std::optional<text::WordVectors> vectors;
   if (name_dim > 0 && !cli.is_set("--no-names")) {
     try {
-      vectors.emplace(text::WordVectors::load(cli.value("--glove")));
+      vectors.emplace(text::WordVectors::load_checked(cli.value("--glove"), name_dim));
     } catch (const InputError& e) {
       throw InputError(std::string(e.what()) + "; or evaluate without joint names: --no-names");
-    }
-    if (vectors->dim() != name_dim) {
-      throw InputError(vectors->path(), 0,
-                       "holds " + std::to_string(vectors->dim()) + "-d vectors, the model in " + model_dir + " reads " +
-                           std::to_string(name_dim) + "-d names; pass the --glove file it was trained with");
     }
   }
 

@@ -1,8 +1,7 @@
 // nec train owo: pretrain the OwO skeleton encoder on the skeletons of dataset caches.
 #include "command_line.h"
-#include "torch_runtime.h"
 #include "commands.h"
-#include "training_loop.h"
+#include "training_command.h"
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
@@ -11,21 +10,16 @@
 #include <fmt/format.h>
 #include <torch/torch.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <optional>
-#include <thread>
 
 namespace nec::app {
 namespace {
 
-namespace fs = std::filesystem;
-
-LossTerms step_terms(const owo::PretrainLosses& l) {
-  LossTerms terms{{"total", l.total}};
+train::LossTerms step_terms(const owo::PretrainLosses& l) {
+  train::LossTerms terms{{"total", l.total}};
   if (l.offset) terms.emplace_back("offset", *l.offset);
   if (l.pair_offset) terms.emplace_back("pair", *l.pair_offset);
   if (l.lca) terms.emplace_back("lca", *l.lca);
@@ -33,25 +27,6 @@ LossTerms step_terms(const owo::PretrainLosses& l) {
   if (l.lca_accuracy) terms.emplace_back("lca_acc", *l.lca_accuracy);
   if (l.grad_norm) terms.emplace_back("grad", *l.grad_norm);
   return terms;
-}
-
-// Refuses to start a run that would overwrite something, or resume nothing.
-void check_out_dir(const std::string& out, bool resume) {
-  std::error_code ec;
-  const bool exists = fs::exists(out, ec);
-  const bool checkpoint = fs::exists(fs::path(out) / "config.json", ec);
-  if (resume) {
-    if (!checkpoint) {
-      throw InputError(out, 0, "no checkpoint to resume; give the --out of an earlier run, or leave out --resume");
-    }
-    return;
-  }
-  if (checkpoint) {
-    throw InputError(out, 0, "already holds a checkpoint; pass --resume to continue it, or choose another --out");
-  }
-  if (exists && (!fs::is_directory(out, ec) || !fs::is_empty(out, ec))) {
-    throw InputError(out, 0, "exists and is not a checkpoint directory; choose another --out");
-  }
 }
 
 }  // namespace
@@ -64,29 +39,27 @@ int run_train_owo(int argc, char** argv) {
                   "name (e.g. whole body plans: \"spider\", \"snake\"), and what the caches hold out, are never trained\n"
                   "on: they validate every validate_every steps (LCA accuracy over all pairs, offset error, share of\n"
                   "trees rebuilt from the exact predicted LCA matrix: rebuilt, and from the predicted LCA\n"
-                  "probabilities: decoded). A checkpoint (model + optimizer state + step) is written every\n"
+                  "probabilities: decoded). A checkpoint (model + training state) is written every\n"
                   "checkpoint_every steps and at the end; --resume continues it with the same config.\n"
-                  "A NaN or infinite loss stops training with exit code 1; the last checkpoint stays.");
+                  "A NaN or infinite loss stops training with exit code 1; the last checkpoint stays.\n"
+                  "--nproc N trains data-parallel in N processes (docs/training.md: several machines).");
   cli.option("--config", "CFG.json", "", "training config (configs/owo_cpu.json, configs/owo_gpu.json)", true);
   cli.option("--data", "CACHES", "", "dataset caches from `nec prepare`, comma-separated", true);
   cli.option("--out", "CKPT", "", "checkpoint directory (replaced atomically at every checkpoint)", true);
-  cli.flag("--resume", "continue the run whose checkpoint is in --out (same config; steps may grow)");
   cli.option("--steps", "N", "", "the step training ends at, instead of the config's steps");
-  cli.option("--threads", "N", "0", "torch threads; 0 = all cores");
-  cli.option("--device", "DEVICE", "cpu", "cpu, cuda or cuda:N");
   cli.option("--glove", "FILE", text::default_word_vectors_path(), "word vectors for joint names (`nec text import-glove`)");
   cli.flag("--no-names", "train without joint names (sets names false and encoder.name_dim 0)");
+  declare_training_options(cli);
   cli.example("nec train owo --config configs/owo_cpu.json --data cache/ --out runs/owo");
   cli.example("nec train owo --config configs/owo_cpu.json --data cache/ --out runs/owo --resume --steps 6000");
+  cli.example("nec train owo --config configs/owo_cpu.json --data cache/ --out runs/owo --nproc 2");
   if (!cli.parse(argc, argv)) return 0;
+  if (const std::optional<int> workers = run_workers_if_asked(cli, "owo", argc, argv)) return *workers;
 
   const std::string config_path = cli.value("--config");
   const std::string out = cli.value("--out");
-  const bool resume = cli.is_set("--resume");
   const std::vector<std::string> caches = cli.list("--data");
   if (caches.empty()) throw UsageError("--data needs at least one cache");
-  const int threads = threads_option(cli);
-  const c10::Device device = device_option(cli);
 
   owo::OwoTrainingConfig config = owo::parse_owo_training_config(read_file(config_path, size_t{1} << 24), config_path);
   if (!cli.value("--steps").empty()) {
@@ -98,78 +71,72 @@ int run_train_owo(int argc, char** argv) {
     config.names = false;
     config.encoder.name_dim = 0;
   }
-  check_out_dir(out, resume);
-  use_torch_threads(threads);
+  TrainingRun run = start_training_run(cli, out);
 
   std::optional<text::WordVectors> vectors;
   if (config.names) {
     try {
-      vectors.emplace(text::WordVectors::load(cli.value("--glove")));
+      vectors.emplace(text::WordVectors::load_checked(cli.value("--glove"), config.encoder.name_dim));
     } catch (const InputError& e) {
-      throw InputError(std::string(e.what()) + "; or train without joint names: --no-names");
-    }
-    if (vectors->dim() != config.encoder.name_dim) {
-      throw InputError(config_path, 0,
-                       "field 'encoder.name_dim' is " + std::to_string(config.encoder.name_dim) + ", but the word vectors " +
-                           vectors->path() + " are " + std::to_string(vectors->dim()) + "-d; set it to " +
-                           std::to_string(vectors->dim()) + " (or train without names: --no-names)");
+      throw InputError(std::string(e.what()) + " (" + config_path +
+                       ": field 'encoder.name_dim'); or train without joint names: --no-names");
     }
   }
 
   std::vector<std::string> data;
-  for (const std::string& cache : caches) data.push_back(fs::absolute(cache).lexically_normal().string());
+  for (const std::string& cache : caches) data.push_back(std::filesystem::absolute(cache).lexically_normal().string());
   owo::SkeletonSet set = owo::load_skeleton_set(data, config.hold_out(), config.data.poses_per_skeleton, config.seed);
   if (set.train.empty()) {
     throw InputError(config_path, 0, "field 'data.held_out' holds out every skeleton of " + cli.value("--data") +
                                          "; nothing is left to train on");
   }
-  owo::OwoTrainer trainer(config, std::move(set), vectors ? &*vectors : nullptr, device);
-  const int64_t start_step = resume ? trainer.resume(out) : 0;
+  owo::OwoTrainer trainer(config, std::move(set), vectors ? &*vectors : nullptr, run.device, run.ranks.get());
+  const int64_t start_step = run.resume ? trainer.resume(out) : 0;
 
-  fmt::print("data     {}\n", trainer.describe_data(data));
-  fmt::print("model    {} + pretraining heads, {} parameters; names {}\n", config.encoder.to_string(),
-             trainer.parameter_count(), config.names ? vectors->path() : std::string("off"));
-  fmt::print("run      steps {}-{}, batch {}, AdamW lr {:g} (warm-up {}, cosine to {:g}), clip {:g}; {}, {} threads\n",
-             start_step + 1, config.steps, config.batch_size, config.optimizer.lr, config.optimizer.warmup_steps,
-             config.optimizer.lr * config.optimizer.final_lr_fraction, config.optimizer.grad_clip, device.str(),
-             torch::get_num_threads());
-  if (resume) fmt::print("resumed  {} at step {}\n", out, start_step);
+  if (run.is_main()) {
+    const train::OptimizerConfig& o = config.optimizer;
+    fmt::print("data     {}\n", trainer.describe_data(data));
+    fmt::print("model    {} + pretraining heads, {} parameters; names {}\n", config.encoder.to_string(),
+               trainer.parameter_count(), config.names ? vectors->path() : std::string("off"));
+    fmt::print("run      steps {}-{}, batch {}, AdamW lr {:g} (warm-up {}, cosine to {:g}), clip {:g}; {}, {} "
+               "process(es) x {} threads\n",
+               start_step + 1, config.steps, config.batch_size, o.learning_rate, o.warmup_steps,
+               o.learning_rate * o.final_lr_fraction, o.grad_clip, run.device.str(),
+               run.ranks ? run.ranks->world_size() : 1, torch::get_num_threads());
+    if (run.resume) fmt::print("resumed  {} at step {}\n", out, start_step);
+  }
   if (start_step >= config.steps) {
-    fmt::print("the checkpoint is at step {} and the run ends at step {}: nothing to do (raise --steps to go on)\n",
-               start_step, config.steps);
+    if (run.is_main()) {
+      fmt::print("the checkpoint is at step {} and the run ends at step {}: nothing to do (raise --steps to go on)\n",
+                 start_step, config.steps);
+    }
     return 0;
   }
   std::fflush(stdout);
 
-  TrainingSchedule schedule;
+  train::TrainingSchedule schedule;
   schedule.total_steps = config.steps;
   schedule.log_every = config.log_every;
   schedule.validate_every = trainer.skeletons().held_out.empty() ? 0 : config.validate_every;
   schedule.checkpoint_every = config.checkpoint_every;
-  const InterruptSignals signals;
-  TrainingHooks hooks;
-  hooks.interrupted = [&] { return signals.received(); };
+  train::TrainingHooks hooks;
   hooks.step = [&](int64_t step) { return step_terms(trainer.step(step)); };
   hooks.validate = [&](int64_t) {
     const owo::ScoreSummary held_out = owo::summarize(trainer.score_held_out());
-    return LossTerms{{"held_out_lca_acc", held_out.lca_accuracy},
-                     {"offset_pct", held_out.offset_percent},
-                     {"rebuilt", held_out.rebuild_rate},
-                     {"decoded", held_out.decode_rate}};
+    return train::LossTerms{{"held_out_lca_acc", held_out.lca_accuracy},
+                            {"offset_pct", held_out.offset_percent},
+                            {"rebuilt", held_out.rebuild_rate},
+                            {"decoded", held_out.decode_rate}};
   };
   hooks.checkpoint = [&](int64_t step) { trainer.save(out, step, data); };
 
   const auto start = std::chrono::steady_clock::now();
-  ProgressReporter progress(stdout, isatty(fileno(stdout)) != 0);
-  const TrainingOutcome outcome = run_training(schedule, start_step, out, hooks, progress);
-  if (outcome.stopped || outcome.interrupted) {
-    fmt::print(stderr, "nec: {}{}\n", outcome.stopped ? "error: " : "", outcome.message);
-    return outcome.exit_code();
-  }
+  const int code = run_training_steps(run, schedule, start_step, out, hooks);
+  if (code != 0 || !run.is_main()) return code;
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   fmt::print("trained steps {}-{} in {} ({:.3g} steps/s); checkpoint {}\nevaluate: nec eval owo --model {} --data {}\n",
-             start_step + 1, outcome.last_step, format_duration(seconds),
-             (outcome.last_step - start_step) / std::max(seconds, 1e-9), out, out, cli.value("--data"));
+             start_step + 1, config.steps, train::format_duration(seconds),
+             (config.steps - start_step) / std::max(seconds, 1e-9), out, out, cli.value("--data"));
   return 0;
 }
 

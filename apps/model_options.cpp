@@ -50,8 +50,7 @@ TokenizerSession open_tokenizer(const TokenizerOptions& options) {
   session.model = tat::load_tat_checkpoint(options.model);
   if (session.model.owo->encoder->config().name_dim > 0 &&
       session.model.tokenizer->config().kind != tat::TokenizerKind::ZeroPadRvq) {
-    session.vectors.emplace(
-        text::WordVectors::load(options.glove.empty() ? text::default_word_vectors_path() : options.glove));
+    session.vectors.emplace(text::WordVectors::load_checked(options.glove, session.model.owo->encoder->config().name_dim));
   }
   session.windows.window_frames = session.model.info.window_frames;
   const int64_t step = 2 * session.model.tokenizer->config().downsampling();

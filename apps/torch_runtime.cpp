@@ -1,7 +1,7 @@
 // Runtime options shared by the torch commands.
 #include "torch_runtime.h"
 
-#include "nec/owo/training.h"
+#include "nec/train/device.h"
 
 #include <torch/torch.h>
 
@@ -23,7 +23,7 @@ void use_torch_threads(int threads) {
 
 c10::Device device_option(const CommandLine& cli) {
   try {
-    return owo::training_device(cli.value("--device"));
+    return train::training_device(cli.value("--device"));
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }

@@ -11,7 +11,7 @@ namespace nec::app {
 int threads_option(const CommandLine& cli);
 // torch::set_num_threads(threads), 0 meaning every core.
 void use_torch_threads(int threads);
-// The --device option: cpu, cuda or cuda:N (owo::training_device); UsageError for an unknown name.
+// The --device option: cpu, cuda or cuda:N (train::training_device); UsageError for an unknown name.
 c10::Device device_option(const CommandLine& cli);
 
 }  // namespace nec::app

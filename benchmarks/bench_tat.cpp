@@ -166,11 +166,10 @@ struct Trainee {
   PeakRss memory;                    // of step kWarmupSteps + 1
 };
 
-// TatTrainer::step without the batch conversion and the OwO embeddings.
+// TatTrainer::step_on without the batch conversion and the OwO embeddings.
 double train_step(Trainee& t) {
   const nec::tat::TatTrainConfig& config = train_config();
-  const double lr = nec::tat::learning_rate_at(config, t.steps++);
-  for (auto& group : t.optimizer->param_groups()) static_cast<torch::optim::AdamWOptions&>(group.options()).lr(lr);
+  const double lr = nec::train::LearningRateSchedule(config.optimizer, config.steps).at(++t.steps);
   t.model->train();
   const BatchTensors& x = t.inputs.batch;
   const nec::tat::TokenizerOutput out = t.model->forward(x.features, x.joint_mask, x.frame_mask, t.inputs.embeddings);
@@ -178,8 +177,8 @@ double train_step(Trainee& t) {
       nec::tat::reconstruction_loss(out.reconstruction, x, out.commitment_loss, config.loss);
   t.optimizer->zero_grad();
   loss.total.backward();
-  if (config.grad_clip > 0) torch::nn::utils::clip_grad_norm_(t.model->parameters(), config.grad_clip);
-  t.optimizer->step();
+  nec::train::optimizer_step(*t.optimizer, t.model->parameters(), config.optimizer.grad_clip, lr);
+  t.model->update_codebooks();
   const at::Tensor perplexity = out.perplexity.to(torch::kCPU, torch::kFloat64);
   benchmark::DoNotOptimize(perplexity.data_ptr<double>());
   return loss.total.item<double>();
@@ -205,8 +204,7 @@ void build_trainee(Trainee& t, int64_t joints) {
   torch::manual_seed(kSeed);
   t.inputs = synthetic_batch(config.batch_size, config.window_frames, joints, config.model.joint_embedding_dim);
   t.model = Tokenizer(config.model);
-  t.optimizer = std::make_unique<torch::optim::AdamW>(
-      t.model->parameters(), torch::optim::AdamWOptions(config.learning_rate).weight_decay(config.weight_decay));
+  t.optimizer = nec::train::make_adamw(t.model->parameters(), config.optimizer);
   for (const at::Tensor& p : t.model->parameters()) t.parameters += p.numel();
   for (int64_t i = 0; i < kWarmupSteps; ++i) t.first_losses.push_back(train_step(t));
   t.memory = measure_peak_rss([&] { benchmark::DoNotOptimize(train_step(t)); });

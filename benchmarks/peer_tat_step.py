@@ -55,6 +55,7 @@ def read_config(configs):
     model = raw.get("model", {})
     quantizer = model.get("quantizer", {})
     loss = raw.get("loss", {})
+    optimizer = raw.get("optimizer", {})
     kind = model.get("kind", "nec-rvq")
     if kind not in ("nec-rvq", "nec-vq"):
         sys.exit(f"peer_tat_step: model.kind {kind!r} is not re-implemented (nec-rvq, nec-vq only)")
@@ -73,11 +74,11 @@ def read_config(configs):
         "quantize_dropout": quantizer.get("quantize_dropout", 0.2),
         "loss": {k: loss.get(k, d) for k, d in (("rotation", 1.0), ("root", 1.0), ("position", 1.0),
                                                 ("velocity", 0.5))},
-        "learning_rate": raw.get("learning_rate", 2e-4),
-        "final_learning_rate": raw.get("final_learning_rate", 2e-5),
-        "warmup_steps": raw.get("warmup_steps", 200),
-        "weight_decay": raw.get("weight_decay", 0.0),
-        "grad_clip": raw.get("grad_clip", 1.0),
+        "learning_rate": optimizer.get("learning_rate", 2e-4),
+        "final_lr_fraction": optimizer.get("final_lr_fraction", 0.1),
+        "warmup_steps": optimizer.get("warmup_steps", 200),
+        "weight_decay": optimizer.get("weight_decay", 0.0),
+        "grad_clip": optimizer.get("grad_clip", 1.0),
         "steps": raw.get("steps", 4000),
         "batch_size": raw.get("batch_size", 32),
         "window_frames": raw.get("window_frames", 64),
@@ -85,13 +86,13 @@ def read_config(configs):
 
 
 def learning_rate_at(c, step):
-    """training.cpp learning_rate_at: linear warmup, then cosine to final_learning_rate."""
-    if step < c["warmup_steps"]:
-        return c["learning_rate"] * (step + 1) / c["warmup_steps"]
-    span = max(1, c["steps"] - c["warmup_steps"])
-    progress = min(1.0, (step - c["warmup_steps"]) / span)
-    return c["final_learning_rate"] + 0.5 * (c["learning_rate"] - c["final_learning_rate"]) * (
-        1.0 + math.cos(math.pi * progress))
+    """train/optimizer.cpp LearningRateSchedule::at (step from 1): linear warmup, then cosine to the final rate."""
+    peak, warmup = c["learning_rate"], c["warmup_steps"]
+    if warmup > 0 and step <= warmup:
+        return peak * max(step, 1) / warmup
+    floor = peak * c["final_lr_fraction"]
+    progress = min(1.0, max(0.0, (step - warmup) / max(1, c["steps"] - warmup)))
+    return floor + (peak - floor) * 0.5 * (1.0 + math.cos(math.pi * progress))
 
 
 # ---- Tokenizer (tokenizer.cpp) ----
@@ -561,8 +562,8 @@ class Trainee:
 
     def step(self):
         """TatTrainer::step without the batch conversion and the OwO embeddings."""
-        lr = learning_rate_at(self.c, self.steps)
         self.steps += 1
+        lr = learning_rate_at(self.c, self.steps)
         for group in self.optimizer.param_groups:
             group["lr"] = lr
         self.model.train()

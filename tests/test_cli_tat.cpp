@@ -27,7 +27,7 @@ bool contains(const std::string& text, const std::string& part) { return text.fi
 constexpr const char* kOwoConfig = R"({
   "encoder": {"name_dim": 0, "dim": 16, "layers": 1, "heads": 2, "edge_dim": 8},
   "pretrain": {"pairs_per_skeleton": 16},
-  "optimizer": {"lr": 0.003, "warmup_steps": 2},
+  "optimizer": {"learning_rate": 0.003, "warmup_steps": 2},
   "data": {"held_out": ["spider"], "poses_per_skeleton": 4},
   "names": false, "batch_size": 4, "steps": 4, "log_every": 2, "validate_every": 4, "checkpoint_every": 4, "seed": 3
 })";
@@ -35,7 +35,8 @@ constexpr const char* kOwoConfig = R"({
 std::string tat_config(double learning_rate = 3e-3) {
   return R"({"model": {"kind": "nec-rvq", "dim": 16, "blocks": 2, "attention_layers": 1, "heads": 2,
   "quantizer": {"layers": 2, "codebook_size": 16, "code_dim": 16}},
-  "learning_rate": )" + std::to_string(learning_rate) + R"(, "final_learning_rate": 0.0, "warmup_steps": 2, "steps": 6,
+  "optimizer": {"learning_rate": )" + std::to_string(learning_rate) + R"(, "final_lr_fraction": 0.0, "warmup_steps": 2},
+  "steps": 6,
   "batch_size": 4, "window_frames": 16, "log_every": 2, "validate_every": 3, "validation_batches": 1,
   "checkpoint_every": 3, "seed": 1})";
 }
@@ -120,8 +121,8 @@ TEST_F(CliTat, TheSameSeedTrainsTheSameModel) {
 
   // With a constant learning rate, a run stopped at step 2 and resumed to 4 takes the steps of one that never stopped.
   nlohmann::json constant = nlohmann::json::parse(tat_config());
-  constant["final_learning_rate"] = constant["learning_rate"];
-  constant["warmup_steps"] = 0;
+  constant["optimizer"]["final_lr_fraction"] = 1.0;
+  constant["optimizer"]["warmup_steps"] = 0;
   constant["checkpoint_every"] = 2;
   auto run = [&](const std::string& out, const std::string& extra) { return train(constant, out, extra); };
   const CommandResult straight = run("straight", "--steps 4");

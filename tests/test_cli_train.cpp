@@ -28,7 +28,7 @@ bool contains(const std::string& text, const std::string& part) { return text.fi
 // A tiny model that takes a step in milliseconds; one line per step. The
 // learning rate is constant after warm-up, so a run to step 4 resumed to step 7
 // takes the steps of a run to step 7.
-std::string tiny_config(const std::string& optimizer = R"({"lr": 0.003, "warmup_steps": 2, "final_lr_fraction": 1})") {
+std::string tiny_config(const std::string& optimizer = R"({"learning_rate": 0.003, "warmup_steps": 2, "final_lr_fraction": 1})") {
   return R"({
   "encoder": {"name_dim": 0, "dim": 16, "layers": 1, "heads": 2, "edge_dim": 8},
   "pretrain": {"pairs_per_skeleton": 16},
@@ -122,10 +122,10 @@ TEST_F(CliTrain, CheckpointsResumeAndEvaluate) {
   EXPECT_EQ(terms_of(resumed_line), terms_of(straight_line));
 
   // Resuming with another config names the field.
-  const std::string changed = write("changed.json", tiny_config(R"({"lr": 0.01, "warmup_steps": 2, "final_lr_fraction": 1})"));
+  const std::string changed = write("changed.json", tiny_config(R"({"learning_rate": 0.01, "warmup_steps": 2, "final_lr_fraction": 1})"));
   const CommandResult mismatch = run_nec(train(changed, out, "--no-names --resume --steps 9"));
   EXPECT_EQ(mismatch.exit_code, 1);
-  EXPECT_TRUE(contains(mismatch.output, "cannot resume: the config differs in 'optimizer.lr'")) << mismatch.output;
+  EXPECT_TRUE(contains(mismatch.output, "cannot resume: the config differs in 'optimizer.learning_rate'")) << mismatch.output;
 
   // Held-out evaluation: a table, and JSON with every number.
   const std::string json = path("eval.json");
@@ -143,7 +143,7 @@ TEST_F(CliTrain, CheckpointsResumeAndEvaluate) {
 }
 
 TEST_F(CliTrain, NonFiniteLossStopsWithTheStepAndExitOne) {
-  const std::string config = write("nan.json", tiny_config(R"({"lr": 1e30, "warmup_steps": 0, "grad_clip": 0})"));
+  const std::string config = write("nan.json", tiny_config(R"({"learning_rate": 1e30, "warmup_steps": 0, "grad_clip": 0})"));
   const std::string out = path("runs/nan");
   const CommandResult run = run_nec(train(config, out, "--no-names --steps 50"));
   EXPECT_EQ(run.exit_code, 1) << run.output;
@@ -154,10 +154,10 @@ TEST_F(CliTrain, NonFiniteLossStopsWithTheStepAndExitOne) {
 
 TEST_F(CliTrain, BadInputNamesTheProblemAndWritesNothing) {
   const std::string out = path("runs/bad");
-  const std::string unknown = write("unknown.json", R"({"optimizer": {"learning_rate": 0.1}})");
+  const std::string unknown = write("unknown.json", R"({"optimizer": {"lr": 0.1}})");
   CommandResult run = run_nec(train(unknown, out, "--no-names"));
   EXPECT_EQ(run.exit_code, 1);
-  EXPECT_TRUE(contains(run.output, "unknown.json: field 'optimizer.learning_rate' is not a known field")) << run.output;
+  EXPECT_TRUE(contains(run.output, "unknown.json: field 'optimizer.lr' is not a known field")) << run.output;
 
   const std::string no_plan = write("no_plan.json", tiny_config());
   run = run_nec("train owo --config " + no_plan + " --data " + path("no_cache") + " --out " + out + " --no-names");

@@ -214,8 +214,7 @@ TEST(OwoPretrain, GradientsReachEveryParameter) {
   std::vector<SkeletonGraph> graphs;
   for (const Skeleton& s : zoo) graphs.push_back(owo::make_skeleton_graph(s, torch::randn({s.joint_count(), 8})));
   graphs.push_back(owo::make_skeleton_graph(small_tree()));  // no names
-  torch::optim::SGD optimizer(model->parameters(), torch::optim::SGDOptions(0.0));
-  const owo::PretrainLosses losses = model->pretrain_step(owo::collate(graphs, 8), optimizer);
+  const owo::PretrainLosses losses = model->backward(owo::collate(graphs, 8));
   ASSERT_TRUE(losses.offset && losses.pair_offset && losses.lca && losses.name && losses.lca_accuracy);
   EXPECT_TRUE(std::isfinite(losses.total));
   for (const auto& item : model->named_parameters()) {
@@ -279,7 +278,11 @@ TEST(OwoPretrain, ItLearns) {
   torch::optim::AdamW optimizer(model->parameters(), torch::optim::AdamWOptions(3e-3).weight_decay(0.0));
   const owo::PretrainLosses before = model->evaluate(all);
   constexpr int kSteps = 150;
-  for (int step = 0; step < kSteps; ++step) model->pretrain_step(batches[step % batches.size()], optimizer);
+  for (int step = 0; step < kSteps; ++step) {
+    optimizer.zero_grad();
+    model->backward(batches[step % batches.size()]);
+    optimizer.step();
+  }
   const owo::PretrainLosses after = model->evaluate(all);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf(
@@ -324,7 +327,11 @@ TEST(OwoPretrain, LcaPointerFitsLongChains) {
   owo::OwoPretrainer model(tiny_config(), pretrain);
   torch::optim::AdamW optimizer(model->parameters(), torch::optim::AdamWOptions(3e-3).weight_decay(0.0));
   constexpr int kSteps = 300;
-  for (int step = 0; step < kSteps; ++step) model->pretrain_step(batch, optimizer);
+  for (int step = 0; step < kSteps; ++step) {
+    optimizer.zero_grad();
+    model->backward(batch);
+    optimizer.step();
+  }
   const at::Tensor predicted = model->all_pair_lca_logits(batch).argmax(-1);  // (B, J, J)
   const at::Tensor pairs = batch.joint_mask.unsqueeze(2).logical_and(batch.joint_mask.unsqueeze(1));
   const double accuracy =

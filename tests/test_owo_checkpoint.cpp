@@ -372,7 +372,11 @@ class OwoCheckpoint : public ::testing::Test {
     pretrain_.pairs_per_skeleton = 8;
     model_ = owo::OwoPretrainer(tiny_config(), pretrain_);
     torch::optim::AdamW optimizer(model_->parameters(), torch::optim::AdamWOptions(1e-2));
-    for (int step = 0; step < 3; ++step) model_->pretrain_step(batch_, optimizer);
+    for (int step = 0; step < 3; ++step) {
+      optimizer.zero_grad();
+      model_->backward(batch_);
+      optimizer.step();
+    }
     dir_ = temp_ / "owo";
     owo::save_owo_checkpoint(dir_, *model_, {3, "random skeletons, seed 21"});
   }

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <torch/torch.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -25,6 +27,13 @@ QuantizerConfig small_config(int64_t layers, int64_t codes, int64_t dim) {
 }
 
 at::Tensor buffer(ResidualQuantizer& rvq, const std::string& name) { return rvq->named_buffers()[name]; }
+
+// One training step of the quantizer alone: a forward, then the step's EMA update.
+QuantizerOutput train_step(ResidualQuantizer& rvq, const at::Tensor& latent, const at::Tensor& mask = {}) {
+  QuantizerOutput out = rvq->forward(latent, mask);
+  rvq->update_codebooks();
+  return out;
+}
 
 // Copies of every buffer, by name.
 std::vector<std::pair<std::string, at::Tensor>> snapshot(ResidualQuantizer& rvq) {
@@ -89,7 +98,7 @@ TEST(TatQuantizer, MoreLayersReconstructBetterAfterEmaSteps) {
   torch::manual_seed(0);
   ResidualQuantizer rvq(small_config(4, 32, 8));
   const at::Tensor data = torch::randn({1024, 8});
-  for (int step = 0; step < 30; ++step) rvq->forward(data);
+  for (int step = 0; step < 30; ++step) train_step(rvq, data);
   rvq->eval();
   const QuantizerOutput q = rvq->forward(data);
   double previous = data.pow(2).mean().item<double>();
@@ -111,12 +120,12 @@ TEST(TatQuantizer, EmaMovesCodesTowardTheData) {
   config.dead_code_threshold = 0.0;  // no resets: only the EMA moves codes
   ResidualQuantizer rvq(config);
   const at::Tensor a = torch::tensor({5.f, 5.f, 5.f}), b = torch::tensor({-5.f, 0.f, 5.f});
-  rvq->forward(a + 0.1 * torch::randn({64, 3}));  // seeds the codebook near a
+  train_step(rvq, a + 0.1 * torch::randn({64, 3}));  // seeds the codebook near a
   auto nearest_to_b = [&] { return (buffer(rvq, "codebooks")[0] - b).norm(2, 1).min().item<double>(); };
   const double start = nearest_to_b();
   std::vector<double> distances;
   for (int step = 0; step < 20; ++step) {
-    rvq->forward(b + 0.1 * torch::randn({64, 3}));
+    train_step(rvq, b + 0.1 * torch::randn({64, 3}));
     distances.push_back(nearest_to_b());
   }
   std::printf("distance of the nearest code to the new data: %.3f -> %.3f -> %.3f\n", start, distances[0],
@@ -126,18 +135,58 @@ TEST(TatQuantizer, EmaMovesCodesTowardTheData) {
   EXPECT_LT(distances.back(), 0.1);
 }
 
+TEST(TatQuantizer, EmaUpdateMatchesItsClosedForm) {
+  // One layer of two codes with known EMA state; one batch of four kept rows and one masked row.
+  QuantizerConfig config = small_config(1, 2, 2);
+  config.ema_decay = 0.75;
+  config.dead_code_threshold = 0.0;
+  ResidualQuantizer rvq(config);
+  {
+    torch::NoGradGuard no_grad;
+    buffer(rvq, "codebooks").copy_(torch::tensor({0.f, 0.f, 4.f, 4.f}).view({1, 2, 2}));
+    buffer(rvq, "ema_counts").copy_(torch::tensor({2.f, 6.f}).view({1, 2}));
+    buffer(rvq, "ema_sums").copy_(torch::tensor({0.f, 0.f, 24.f, 24.f}).view({1, 2, 2}));
+    buffer(rvq, "initialized").fill_(true);
+  }
+  const at::Tensor rows = torch::tensor({1.f, 0.f, -1.f, 1.f, 3.f, 5.f, 5.f, 3.f, 100.f, 100.f}).view({5, 2});
+  const at::Tensor mask = torch::tensor({1, 1, 1, 1, 0}, torch::kBool);
+  const QuantizerOutput q = rvq->forward(rows, mask);
+  EXPECT_TRUE(torch::equal(q.codes.squeeze(1).narrow(0, 0, 4), torch::tensor({0, 0, 1, 1}, torch::kLong)));
+  EXPECT_TRUE(torch::equal(buffer(rvq, "codebooks")[0][1], torch::tensor({4.f, 4.f})))
+      << "the EMA moves in update_codebooks(), not in forward";
+  ASSERT_TRUE(rvq->update_codebooks());
+  // counts' = 0.75 c + 0.25 n = (1.5 + 0.5, 4.5 + 0.5); sums' = 0.75 s + 0.25 (sum of the code's rows).
+  const double counts[2] = {0.75 * 2 + 0.25 * 2, 0.75 * 6 + 0.25 * 2};
+  const double sums[2][2] = {{0.25 * 0.0, 0.25 * 1.0}, {0.75 * 24 + 0.25 * 8, 0.75 * 24 + 0.25 * 8}};
+  const double total = counts[0] + counts[1], epsilon = 1e-5;
+  double largest = 0.0;
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_NEAR(buffer(rvq, "ema_counts")[0][k].item<double>(), counts[k], 1e-6);
+    const double smoothed = (counts[k] + epsilon) / (total + 2 * epsilon) * total;  // Laplace smoothing
+    for (int c = 0; c < 2; ++c) {
+      const double expected = sums[k][c] / smoothed;
+      const double got = buffer(rvq, "codebooks")[0][k][c].item<double>();
+      largest = std::max(largest, std::abs(got - expected));
+      EXPECT_NEAR(buffer(rvq, "ema_sums")[0][k][c].item<double>(), sums[k][c], 1e-6);
+    }
+  }
+  std::printf("largest codebook difference from the closed form: %.3g\n", largest);
+  EXPECT_LT(largest, 1e-5);
+  EXPECT_FALSE(rvq->update_codebooks()) << "statistics are used once";
+}
+
 TEST(TatQuantizer, ResetsDeadCodesToKeptResiduals) {
   torch::manual_seed(2);
   ResidualQuantizer rvq(small_config(1, 8, 4));
   const at::Tensor data = torch::randn({64, 4});
-  rvq->forward(data);  // seeds
+  train_step(rvq, data);  // seeds
   {
     torch::NoGradGuard no_grad;
     buffer(rvq, "codebooks")[0][3].fill_(1000.0f);  // far from everything: never chosen
     buffer(rvq, "ema_sums")[0][3].fill_(0.0f);
     buffer(rvq, "ema_counts")[0][3].fill_(0.0f);
   }
-  rvq->forward(data);
+  train_step(rvq, data);
   const at::Tensor code = buffer(rvq, "codebooks")[0][3];
   const double to_data = (data - code).norm(2, 1).min().item<double>();
   std::printf("reset code: distance to the nearest data row %.3g\n", to_data);
@@ -153,7 +202,7 @@ TEST(TatQuantizer, SeedsLaterLayersAtResidualsTheFirstLeavesUnexplained) {
   QuantizerConfig config = small_config(2, 32, 4);
   config.dead_code_threshold = 0.0;  // seeding alone
   ResidualQuantizer rvq(config);
-  rvq->forward(torch::randn({32, 4}));
+  train_step(rvq, torch::randn({32, 4}));
   const at::Tensor norms = buffer(rvq, "codebooks")[1].norm(2, 1);
   const int64_t zero_codes = (norms < 1e-6).sum().item<int64_t>();
   std::printf("second-layer codes at zero residuals: %lld of 32\n", static_cast<long long>(zero_codes));
@@ -170,7 +219,7 @@ TEST(TatQuantizer, MaskedRowsDoNotInfluenceTheCodebooks) {
     torch::manual_seed(3);
     ResidualQuantizer rvq(config);
     QuantizerOutput q;
-    for (int step = 0; step < 5; ++step) q = rvq->forward(input, mask);
+    for (int step = 0; step < 5; ++step) q = train_step(rvq, input, mask);
     return std::make_pair(snapshot(rvq), q.commitment_loss.item<double>());
   };
   const auto clean = run(data), dirty = run(garbage);
@@ -188,7 +237,7 @@ TEST(TatQuantizer, EvalModeLeavesBuffersUnchangedAndNeverDrops) {
   config.quantize_dropout = 1.0;
   ResidualQuantizer rvq(config);
   const at::Tensor data = torch::randn({50, 4});
-  rvq->forward(data);
+  train_step(rvq, data);
   rvq->eval();
   const auto before = snapshot(rvq);
   for (int i = 0; i < 3; ++i) {
@@ -215,7 +264,9 @@ TEST(TatQuantizer, QuantizeDropoutUsesOnlyTheFirstLayers) {
     for (int64_t r = 0; r < 4; ++r) {
       EXPECT_EQ(used[r].item<bool>(), r < count);  // a prefix of the layers
       EXPECT_EQ((q.codes.select(1, r) < 0).all().item<bool>(), r >= count);
-      if (r >= count) EXPECT_EQ(q.perplexity[r].item<double>(), 0.0);
+      if (r >= count) {
+        EXPECT_EQ(q.perplexity[r].item<double>(), 0.0);
+      }
     }
   }
   std::printf("batches using 1..4 layers: %d %d %d %d\n", seen[1], seen[2], seen[3], seen[4]);
@@ -227,7 +278,7 @@ TEST(TatQuantizer, StraightThroughGradientAndCommitmentLoss) {
   QuantizerConfig config = small_config(2, 8, 4);
   config.commitment_weight = 0.25;
   ResidualQuantizer rvq(config);
-  rvq->forward(torch::randn({64, 4}));
+  train_step(rvq, torch::randn({64, 4}));
   rvq->eval();
   const at::Tensor latent = torch::randn({10, 4}).requires_grad_(true);
   const at::Tensor mask = torch::tensor({1, 1, 0, 1, 0, 1, 1, 1, 0, 1}, torch::kBool);

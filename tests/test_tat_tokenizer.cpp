@@ -426,6 +426,7 @@ TEST(TatTokenizer, LearnsToReconstructZooClips) {
   };
   const auto start = std::chrono::steady_clock::now();
   model->forward(x.batch.features, x.batch.joint_mask, x.batch.frame_mask, x.embeddings);  // seeds the codebooks
+  model->update_codebooks();
   const double initial = evaluate();
   const int steps = 80;
   for (int step = 0; step < steps; ++step) {
@@ -434,6 +435,7 @@ TEST(TatTokenizer, LearnsToReconstructZooClips) {
     optimizer.zero_grad();
     l.total.backward();
     optimizer.step();
+    model->update_codebooks();
   }
   const double final_loss = evaluate();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

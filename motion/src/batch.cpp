@@ -70,9 +70,21 @@ std::vector<std::string> augmented_canonical_names(const Skeleton& original, con
 
 }  // namespace
 
+BatchShare share_of(int64_t items, int rank, int world_size) {
+  if (world_size < 1 || rank < 0 || rank >= world_size || items < 0) {
+    throw std::invalid_argument("share_of: rank " + std::to_string(rank) + " of " + std::to_string(world_size));
+  }
+  const int64_t base = items / world_size, extra = items % world_size;
+  return BatchShare{rank * base + std::min<int64_t>(rank, extra), base + (rank < extra ? 1 : 0)};
+}
+
 void BatchOptions::validate() const {
   if (batch_size < 1) throw std::invalid_argument("BatchOptions: batch_size must be at least 1, is " + std::to_string(batch_size));
   if (crop_frames < 0) throw std::invalid_argument("BatchOptions: crop_frames must be >= 0, is " + std::to_string(crop_frames));
+  if (shard_count < 1 || shard_rank < 0 || shard_rank >= shard_count) {
+    throw std::invalid_argument("BatchOptions: shard_rank must be in [0, shard_count), is " + std::to_string(shard_rank) +
+                                " of " + std::to_string(shard_count));
+  }
   if (joint_buckets < 0) throw std::invalid_argument("BatchOptions: joint_buckets must be >= 0, is " + std::to_string(joint_buckets));
   if (!(augment_probability >= 0.0 && augment_probability <= 1.0)) {
     throw std::invalid_argument("BatchOptions: augment_probability must be in [0, 1], is " + std::to_string(augment_probability));
@@ -202,8 +214,12 @@ void BatchLoader::seek(int epoch, int index) {
 }
 
 Batch BatchLoader::assemble(const std::vector<int>& order, int epoch, int index) const {
-  const size_t first = static_cast<size_t>(index) * options_.batch_size;
-  const size_t last = std::min(order.size(), first + options_.batch_size);
+  const size_t batch_first = static_cast<size_t>(index) * options_.batch_size;
+  const size_t batch_last = std::min(order.size(), batch_first + options_.batch_size);
+  const BatchShare share =
+      share_of(static_cast<int64_t>(batch_last - batch_first), options_.shard_rank, options_.shard_count);
+  const size_t first = batch_first + static_cast<size_t>(share.begin);
+  const size_t last = first + static_cast<size_t>(share.count);
 
   std::vector<Item> items;
   items.reserve(last - first);
@@ -244,6 +260,7 @@ Batch BatchLoader::assemble(const std::vector<int>& order, int epoch, int index)
 
   Batch b;
   b.size = static_cast<int>(items.size());
+  b.global_size = static_cast<int>(batch_last - batch_first);
   for (const Item& item : items) {
     b.max_joints = std::max(b.max_joints, item.skeleton.joint_count());
     b.frames = std::max(b.frames, item.features.frame_count);

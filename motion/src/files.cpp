@@ -55,12 +55,28 @@ void write_file_atomic(const std::string& path, std::string_view contents) {
     }
   }
   std::error_code ec;
+  try {
+    sync_to_disk(temp.string());
+  } catch (const std::runtime_error&) {
+    std::filesystem::remove(temp, ec);
+    throw;
+  }
   std::filesystem::rename(temp, target, ec);
   if (ec) {
     std::error_code ignored;
     std::filesystem::remove(temp, ignored);
     throw std::runtime_error(path + ": cannot move the written file into place: " + ec.message());
   }
+  sync_to_disk(target.parent_path().empty() ? "." : target.parent_path().string());
+}
+
+void sync_to_disk(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw std::runtime_error(path + ": cannot open to flush it to disk: " + std::strerror(errno));
+  const bool ok = ::fsync(fd) == 0;
+  const int error = errno;
+  ::close(fd);
+  if (!ok) throw std::runtime_error(path + ": cannot flush to disk: " + std::strerror(error));
 }
 
 namespace {

@@ -1,7 +1,7 @@
 // OwO checkpoint directories: config.json + tensors.pt, atomic save, checked load.
 #include "nec/owo/checkpoint.h"
 
-#include "nec/owo/checkpoint_io.h"
+#include "nec/train/checkpoint_io.h"
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
@@ -20,6 +20,9 @@ namespace nec::owo {
 namespace {
 
 namespace fs = std::filesystem;
+using train::CheckpointConfig;
+using train::JsonFields;
+using train::read_checkpoint_config;
 using nlohmann::json;
 
 constexpr const char* kArchitecture = "OwoPretrainer";
@@ -96,7 +99,7 @@ PretrainConfig read_pretrain_config(const JsonFields& reader, const json& root) 
 }  // namespace
 
 void save_owo_checkpoint(const std::string& dir, OwoPretrainerImpl& model, const OwoCheckpointInfo& info) {
-  write_checkpoint_directory(dir, "an OwO checkpoint", [&](const std::string& temp) {
+  train::write_checkpoint_directory(dir, "an OwO checkpoint", [&](const std::string& temp) {
     const json config = {{"format", kOwoCheckpointFormat},
                          {"version", kOwoCheckpointVersion},
                          {"architecture", kArchitecture},
@@ -106,7 +109,7 @@ void save_owo_checkpoint(const std::string& dir, OwoPretrainerImpl& model, const
                          {"data", info.data},
                          {"tensors", kTensorFile}};
     write_file_atomic((fs::path(temp) / kConfigFile).string(), config.dump(2) + "\n");
-    save_module_tensors(model, (fs::path(temp) / kTensorFile).string());
+    train::save_module_tensors(model, (fs::path(temp) / kTensorFile).string());
   });
 }
 
@@ -136,7 +139,7 @@ LoadedOwoCheckpoint load_owo_checkpoint(const std::string& dir) {
   } catch (const std::invalid_argument& error) {
     reader.fail(std::string(error.what()) + "; the checkpoint is damaged, " + kTrainHint);
   }
-  load_module_tensors(*loaded.model, (fs::path(dir) / tensor_file).string(), kTrainHint);
+  train::load_module_tensors(*loaded.model, (fs::path(dir) / tensor_file).string(), kTrainHint);
   return loaded;
 }
 

@@ -158,39 +158,10 @@ PretrainLosses to_losses(const at::Tensor& total, const at::Tensor& offset, cons
 
 }  // namespace
 
-PretrainLosses OwoPretrainerImpl::pretrain_step(const GraphBatch& batch, torch::optim::Optimizer& optimizer) {
-  optimizer.zero_grad();
+PretrainLosses OwoPretrainerImpl::backward(const GraphBatch& batch, double loss_scale) {
   const Terms terms = compute(batch);
-  terms.total.backward();
-  optimizer.step();
+  (terms.total * loss_scale).backward();
   return to_losses(terms.total, terms.offset, terms.pair_offset, terms.lca, terms.name, terms.lca_accuracy);
-}
-
-PretrainLosses OwoPretrainerImpl::pretrain_step(const GraphBatch& batch, torch::optim::Optimizer& optimizer,
-                                                double max_grad_norm) {
-  optimizer.zero_grad();
-  const Terms terms = compute(batch);
-  terms.total.backward();
-  std::vector<at::Tensor> gradients;
-  for (const at::Tensor& parameter : parameters()) {
-    if (parameter.grad().defined()) gradients.push_back(parameter.grad().detach().norm().reshape({1}));
-  }
-  const double grad_norm = gradients.empty() ? 0.0 : torch::cat(gradients).norm().item<double>();
-  PretrainLosses losses = to_losses(terms.total, terms.offset, terms.pair_offset, terms.lca, terms.name, terms.lca_accuracy);
-  losses.grad_norm = grad_norm;
-  if (!std::isfinite(losses.total) || !std::isfinite(grad_norm)) {
-    optimizer.zero_grad();
-    return losses;
-  }
-  if (max_grad_norm > 0.0 && grad_norm > max_grad_norm) {
-    torch::NoGradGuard no_grad;
-    const double scale = max_grad_norm / (grad_norm + 1e-6);
-    for (const at::Tensor& parameter : parameters()) {
-      if (parameter.grad().defined()) parameter.grad().mul_(scale);
-    }
-  }
-  optimizer.step();
-  return losses;
 }
 
 PretrainLosses OwoPretrainerImpl::evaluate(const GraphBatch& batch) {

@@ -1,12 +1,15 @@
 // OwO pretraining runs: config file, learning-rate schedule, batches, training checkpoints.
 #include "nec/owo/training.h"
 
+#include "nec/motion/batch.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/owo/checkpoint.h"
-#include "nec/owo/checkpoint_io.h"
 #include "nec/owo/graph.h"
 #include "nec/owo/joint_names.h"
+#include "nec/train/checkpoint_io.h"
+#include "nec/train/distributed.h"
+#include "nec/train/training_state.h"
 
 #include <c10/util/Exception.h>
 #include <nlohmann/json.hpp>
@@ -28,9 +31,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-constexpr const char* kRecordFile = "training.json";
-constexpr const char* kOptimizerFile = "optimizer.pt";
-constexpr double kPi = 3.14159265358979323846;
+using train::JsonFields;
 // Schedule fields a resumed run may change.
 const std::set<std::string> kScheduleFields = {"steps", "log_every", "validate_every", "checkpoint_every"};
 
@@ -44,8 +45,6 @@ uint64_t mix(uint64_t x) {  // splitmix64 finalizer
   x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
   return x ^ (x >> 31);
 }
-
-std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
 
 // Reads an object of a config file: optional fields with checked types, and
 // no field it does not know.
@@ -163,8 +162,8 @@ OwoTrainingConfig config_from_json(const json& root, const std::string& file) {
   pretrain.read("temperature", c.pretrain.temperature);
 
   const ConfigFields optimizer(file, top.object("optimizer"), "optimizer.",
-                               {"lr", "weight_decay", "warmup_steps", "final_lr_fraction", "grad_clip"});
-  optimizer.read("lr", c.optimizer.lr);
+                               {"learning_rate", "weight_decay", "warmup_steps", "final_lr_fraction", "grad_clip"});
+  optimizer.read("learning_rate", c.optimizer.learning_rate);
   optimizer.read("weight_decay", c.optimizer.weight_decay);
   optimizer.read("warmup_steps", c.optimizer.warmup_steps);
   optimizer.read("final_lr_fraction", c.optimizer.final_lr_fraction);
@@ -226,7 +225,7 @@ json config_to_json(const OwoTrainingConfig& c) {
             {"pairs_per_skeleton", c.pretrain.pairs_per_skeleton},
             {"temperature", c.pretrain.temperature}}},
           {"optimizer",
-           {{"lr", c.optimizer.lr},
+           {{"learning_rate", c.optimizer.learning_rate},
             {"weight_decay", c.optimizer.weight_decay},
             {"warmup_steps", c.optimizer.warmup_steps},
             {"final_lr_fraction", c.optimizer.final_lr_fraction},
@@ -255,53 +254,6 @@ json config_to_json(const OwoTrainingConfig& c) {
           {"seed", c.seed}};
 }
 
-struct FieldDifference {
-  std::string field;        // dotted, e.g. "optimizer.lr"
-  std::string then, now;    // JSON values
-};
-
-// Dotted name of a flattened JSON pointer, list indices dropped: "/data/held_out/0" -> "data.held_out".
-std::string dotted(const std::string& pointer) {
-  std::string out;
-  size_t start = 1;
-  while (start <= pointer.size()) {
-    size_t end = pointer.find('/', start);
-    if (end == std::string::npos) end = pointer.size();
-    const std::string part = pointer.substr(start, end - start);
-    const bool index = !part.empty() && std::all_of(part.begin(), part.end(), [](char c) { return c >= '0' && c <= '9'; });
-    if (!index && !part.empty()) out += (out.empty() ? "" : ".") + part;
-    start = end + 1;
-  }
-  return out;
-}
-
-std::vector<FieldDifference> differences(const OwoTrainingConfig& a, const OwoTrainingConfig& b) {
-  const json json_a = config_to_json(a), json_b = config_to_json(b);
-  const json flat_a = json_a.flatten(), flat_b = json_b.flatten();
-  auto value_of = [](const json& root, const std::string& field) {
-    std::string pointer = "/" + field;
-    std::replace(pointer.begin(), pointer.end(), '.', '/');
-    const json::json_pointer at(pointer);
-    return root.contains(at) ? root.at(at).dump() : std::string("absent");
-  };
-  std::map<std::string, FieldDifference> found;
-  auto note = [&](const std::string& pointer) {
-    const std::string field = dotted(pointer);
-    if (kScheduleFields.count(field) || found.count(field)) return;
-    found[field] = FieldDifference{field, value_of(json_a, field), value_of(json_b, field)};
-  };
-  for (auto it = flat_a.begin(); it != flat_a.end(); ++it) {
-    const auto other = flat_b.find(it.key());
-    if (other == flat_b.end() || *other != it.value()) note(it.key());
-  }
-  for (auto it = flat_b.begin(); it != flat_b.end(); ++it) {
-    if (!flat_a.contains(it.key())) note(it.key());
-  }
-  std::vector<FieldDifference> out;
-  for (auto& [field, difference] : found) out.push_back(std::move(difference));
-  return out;
-}
-
 std::vector<std::string> string_list(const JsonFields& fields, const json& root, const std::string& key) {
   const json& value = root.contains(key) ? root.at(key) : json();
   if (!value.is_array()) fields.fail("field '" + key + "' must be a list of strings; " + fields.hint());
@@ -314,14 +266,6 @@ std::vector<std::string> string_list(const JsonFields& fields, const json& root,
 }
 
 }  // namespace
-
-void OwoOptimizerConfig::validate() const {
-  require(std::isfinite(lr) && lr > 0.0, "optimizer.lr must be a positive number");
-  require(weight_decay >= 0.0, "optimizer.weight_decay must be >= 0");
-  require(warmup_steps >= 0, "optimizer.warmup_steps must be >= 0");
-  require(final_lr_fraction >= 0.0 && final_lr_fraction <= 1.0, "optimizer.final_lr_fraction must be in [0, 1]");
-  require(grad_clip >= 0.0, "optimizer.grad_clip must be >= 0 (0 = no clipping)");
-}
 
 void OwoDataConfig::validate() const {
   require(poses_per_skeleton >= 0 && poses_per_skeleton <= 1024, "data.poses_per_skeleton must be in [0, 1024]");
@@ -344,7 +288,11 @@ void OwoTrainingConfig::validate() const {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("pretrain: ") + e.what());
   }
-  optimizer.validate();
+  try {
+    optimizer.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("optimizer.") + e.what());
+  }
   data.validate();
   require(names || encoder.name_dim == 0,
           "encoder.name_dim must be 0 when names is false (got " + std::to_string(encoder.name_dim) + ")");
@@ -371,20 +319,7 @@ OwoTrainingConfig parse_owo_training_config(const std::string& text, const std::
 std::string owo_training_config_json(const OwoTrainingConfig& config) { return config_to_json(config).dump(2) + "\n"; }
 
 std::vector<std::string> differing_fields(const OwoTrainingConfig& a, const OwoTrainingConfig& b) {
-  std::vector<std::string> out;
-  for (const FieldDifference& d : differences(a, b)) out.push_back(d.field);
-  return out;
-}
-
-double learning_rate(const OwoOptimizerConfig& optimizer, int64_t step, int64_t total_steps) {
-  const double peak = optimizer.lr;
-  if (optimizer.warmup_steps > 0 && step <= optimizer.warmup_steps) {
-    return peak * static_cast<double>(std::max<int64_t>(step, 1)) / optimizer.warmup_steps;
-  }
-  const double span = static_cast<double>(std::max<int64_t>(total_steps - optimizer.warmup_steps, 1));
-  const double progress = std::clamp((step - optimizer.warmup_steps) / span, 0.0, 1.0);
-  const double floor = peak * optimizer.final_lr_fraction;
-  return floor + (peak - floor) * 0.5 * (1.0 + std::cos(kPi * progress));
+  return train::differing_fields(config_to_json(a), config_to_json(b), kScheduleFields);
 }
 
 SkeletonSet load_skeleton_set(const std::vector<std::string>& caches, const HoldOut& hold_out,
@@ -410,64 +345,29 @@ SkeletonSet load_skeleton_set(const std::vector<std::string>& caches, const Hold
   return set;
 }
 
-c10::Device training_device(const std::string& name) {
-  if (name == "cpu") return c10::Device(c10::kCPU);
-  if (name.rfind("cuda", 0) != 0) {
-    throw std::invalid_argument("unknown device '" + name + "' (known: cpu, cuda, cuda:N)");
-  }
-  c10::Device device(c10::kCPU);
-  try {
-    device = c10::Device(name);
-  } catch (const c10::Error&) {
-    throw std::invalid_argument("unknown device '" + name + "' (known: cpu, cuda, cuda:N)");
-  }
-  if (!torch::cuda::is_available()) {
-    throw std::runtime_error("--device " + name + ": this nec's torch has no CUDA device (" +
-                             "a CPU-only libtorch, or no GPU visible); use --device cpu");
-  }
-  if (device.has_index() && device.index() >= static_cast<int>(torch::cuda::device_count())) {
-    throw std::runtime_error("--device " + name + ": only " + std::to_string(torch::cuda::device_count()) +
-                             " CUDA device(s) visible");
-  }
-  return device;
-}
-
 std::optional<OwoTrainingRecord> read_owo_training_record(const std::string& dir) {
-  const std::string path = (fs::path(dir) / kRecordFile).string();
-  std::error_code ec;
-  if (!fs::exists(path, ec)) return std::nullopt;
-  const std::string hint = "the training state is damaged; train again into a new --out";
-  const JsonFields fields(path, hint);
-  json root;
-  try {
-    root = json::parse(read_file(path, size_t{1} << 26));
-  } catch (const json::parse_error& e) {
-    fields.fail(std::string("not valid JSON (") + e.what() + "); " + hint);
-  }
-  if (!root.is_object()) fields.fail("not a training record (no JSON object); " + hint);
-  std::string format;
-  fields.read(root, "format", "", format);
-  if (format != kOwoTrainingFormat) {
-    fields.fail("format '" + format + "' is not " + kOwoTrainingFormat + "; " + hint);
-  }
-  int64_t version = 0;
-  fields.read(root, "version", "", version);
-  if (version != kOwoTrainingVersion) {
-    fields.fail("was written by format version " + std::to_string(version) + "; this nec reads version " +
-                std::to_string(kOwoTrainingVersion));
-  }
+  const std::optional<train::TrainingState> state = train::read_training_state(dir, "owo");
+  if (!state) return std::nullopt;
+  const std::string path = (fs::path(dir) / train::kTrainingStateFile).string();
+  const JsonFields fields(path, "the training state is damaged; train again into a new --out");
   OwoTrainingRecord record;
-  fields.read(root, "step", "", record.step);
-  record.config = config_from_json(fields.object(root, "config", ""), path);
-  record.data = string_list(fields, root, "data");
-  record.train_skeletons = string_list(fields, root, "train_skeletons");
-  record.held_out_skeletons = string_list(fields, root, "held_out_skeletons");
+  record.step = state->step;
+  record.config = config_from_json(state->config, path);
+  record.schedule = state->schedule;
+  record.data = string_list(fields, state->data, "caches");
+  record.train_skeletons = string_list(fields, state->data, "train_skeletons");
+  record.held_out_skeletons = string_list(fields, state->data, "held_out_skeletons");
   return record;
 }
 
 OwoTrainer::OwoTrainer(const OwoTrainingConfig& config, SkeletonSet skeletons, const text::WordVectors* vectors,
-                       const c10::Device& device)
-    : config_(config), skeletons_(std::move(skeletons)), vectors_(config.names ? vectors : nullptr), device_(device) {
+                       const c10::Device& device, const train::Communicator* ranks)
+    : config_(config),
+      skeletons_(std::move(skeletons)),
+      vectors_(config.names ? vectors : nullptr),
+      device_(device),
+      ranks_(ranks),
+      schedule_(config.optimizer, config.steps) {
   config_.validate();
   require(!skeletons_.train.empty(), "OwoTrainer: no training skeletons (all are held out?)");
   if (config_.names) {
@@ -479,9 +379,7 @@ OwoTrainer::OwoTrainer(const OwoTrainingConfig& config, SkeletonSet skeletons, c
   torch::manual_seed(config_.seed);
   model_ = OwoPretrainer(config_.encoder, config_.pretrain);
   model_->to(device_);
-  optimizer_ = std::make_unique<torch::optim::AdamW>(
-      model_->parameters(),
-      torch::optim::AdamWOptions(config_.optimizer.lr).weight_decay(config_.optimizer.weight_decay));
+  optimizer_ = train::make_adamw(model_->parameters(), config_.optimizer);
 
   // Buckets of similar joint counts: a batch pads to its largest skeleton.
   std::vector<size_t> order(skeletons_.train.size());
@@ -505,8 +403,6 @@ at::Tensor OwoTrainer::names_of(const std::vector<std::string>& canonical_names)
 PretrainLosses OwoTrainer::step(int64_t step) {
   const uint64_t stream = mix(config_.seed ^ mix(static_cast<uint64_t>(step)));
   std::mt19937 rng(static_cast<uint32_t>(stream));
-  const double lr = learning_rate(config_.optimizer, step, config_.steps);
-  for (auto& group : optimizer_->param_groups()) group.options().set_lr(lr);
 
   // A bucket with probability proportional to its size, then skeletons uniformly within it.
   const size_t anchor = std::uniform_int_distribution<size_t>(0, skeletons_.train.size() - 1)(rng);
@@ -518,7 +414,8 @@ PretrainLosses OwoTrainer::step(int64_t step) {
   const std::vector<size_t>& members = buckets_[std::min(bucket, buckets_.size() - 1)];
   std::uniform_int_distribution<size_t> pick(0, members.size() - 1);
   // Up to batch_size skeletons, fewer when B * Jmax^2 would pass batch_joint_pairs (at least one).
-  std::vector<SkeletonGraph> graphs;
+  // Every rank draws the whole batch alike and keeps its share.
+  std::vector<AugmentedSkeleton> rigs;
   int64_t largest = 0;
   for (int64_t b = 0; b < config_.batch_size; ++b) {
     const PretrainSkeleton& source = skeletons_.train[members[pick(rng)]];
@@ -526,11 +423,52 @@ PretrainLosses OwoTrainer::step(int64_t step) {
     const int64_t joints = std::max<int64_t>(largest, rig.skeleton.joint_count());
     if (b > 0 && config_.batch_joint_pairs > 0 && (b + 1) * joints * joints > config_.batch_joint_pairs) break;
     largest = joints;
-    graphs.push_back(make_skeleton_graph(rig.skeleton, names_of(rig.canonical_names), config_.encoder.graph));
+    rigs.push_back(std::move(rig));
   }
-  const GraphBatch batch = collate(graphs, config_.encoder.name_dim).to(device_);
-  torch::manual_seed(mix(stream) >> 1);  // the sampled joint pairs
-  return model_->pretrain_step(batch, *optimizer_, config_.optimizer.grad_clip);
+  const int rank = ranks_ ? ranks_->rank() : 0, world = ranks_ ? ranks_->world_size() : 1;
+  const BatchShare share = share_of(static_cast<int64_t>(rigs.size()), rank, world);
+  const double weight = static_cast<double>(share.count) / static_cast<double>(rigs.size());
+
+  optimizer_->zero_grad();
+  PretrainLosses losses;
+  if (share.count > 0) {
+    std::vector<SkeletonGraph> graphs;
+    for (int64_t i = share.begin; i < share.begin + share.count; ++i) {
+      graphs.push_back(make_skeleton_graph(rigs[i].skeleton, names_of(rigs[i].canonical_names), config_.encoder.graph));
+    }
+    const GraphBatch batch = collate(graphs, config_.encoder.name_dim).to(device_);
+    torch::manual_seed(mix(stream) >> 1);  // the sampled joint pairs
+    losses = model_->backward(batch, weight);
+  }
+  const train::OptimizerStep taken =
+      train::optimizer_step(*optimizer_, model_->parameters(), config_.optimizer.grad_clip, schedule_.at(step), ranks_);
+  losses.grad_norm = taken.grad_norm;
+  if (ranks_ != nullptr) losses = summed_over_ranks(losses, weight);
+  return losses;
+}
+
+PretrainLosses OwoTrainer::summed_over_ranks(const PretrainLosses& local, double weight) const {
+  // The ranks' terms weighted by their shares: the terms of the whole batch. A
+  // term counts where it ran (a rank without items ran none).
+  PretrainLosses out = local;
+  std::optional<double>* terms[] = {&out.offset, &out.pair_offset, &out.lca, &out.name, &out.lca_accuracy};
+  constexpr int64_t kTerms = 1 + static_cast<int64_t>(std::size(terms));
+  at::Tensor values = torch::zeros({2, kTerms}, torch::kDouble);  // (value x weight, ran)
+  values[0][0] = out.total * weight;
+  values[1][0] = 1.0;
+  for (int64_t i = 1; i < kTerms; ++i) {
+    if (!terms[i - 1]->has_value()) continue;
+    values[0][i] = **terms[i - 1] * weight;
+    values[1][i] = 1.0;
+  }
+  std::vector<at::Tensor> tensors{values};
+  ranks_->sum(tensors);
+  out.total = tensors[0][0][0].item<double>();
+  for (int64_t i = 1; i < kTerms; ++i) {
+    *terms[i - 1] = tensors[0][1][i].item<double>() > 0 ? std::optional<double>(tensors[0][0][i].item<double>())
+                                                        : std::nullopt;
+  }
+  return out;
 }
 
 std::vector<SkeletonScore> OwoTrainer::score_held_out() {
@@ -572,48 +510,32 @@ std::string OwoTrainer::describe_data(const std::vector<std::string>& data) cons
 }
 
 void OwoTrainer::save(const std::string& dir, int64_t step, const std::vector<std::string>& data) {
-  json record = {{"format", kOwoTrainingFormat},
-                 {"version", kOwoTrainingVersion},
-                 {"step", step},
-                 {"config", config_to_json(config_)},
-                 {"data", data},
-                 {"train_skeletons", json::array()},
-                 {"held_out_skeletons", json::array()},
-                 {"optimizer", kOptimizerFile}};
-  for (const PretrainSkeleton& s : skeletons_.train) record["train_skeletons"].push_back(s.hash);
-  for (const PretrainSkeleton& s : skeletons_.held_out) record["held_out_skeletons"].push_back(s.hash);
+  train::TrainingState state;
+  state.model = "owo";
+  state.step = step;
+  state.config = config_to_json(config_);
+  state.schedule = schedule_.to_json();
+  state.data = {{"caches", data}, {"train_skeletons", json::array()}, {"held_out_skeletons", json::array()}};
+  for (const PretrainSkeleton& s : skeletons_.train) state.data["train_skeletons"].push_back(s.hash);
+  for (const PretrainSkeleton& s : skeletons_.held_out) state.data["held_out_skeletons"].push_back(s.hash);
   const std::string description = describe_data(data);
-  write_checkpoint_directory(dir, "an OwO training checkpoint", [&](const std::string& temp) {
+  train::write_checkpoint_directory(dir, "an OwO training checkpoint", [&](const std::string& temp) {
     save_owo_checkpoint(temp, *model_, OwoCheckpointInfo{step, description});
-    write_file_atomic((fs::path(temp) / kRecordFile).string(), record.dump(2) + "\n");
-    try {
-      torch::save(*optimizer_, (fs::path(temp) / kOptimizerFile).string());
-    } catch (const c10::Error& e) {
-      throw std::runtime_error(dir + ": cannot write the optimizer state: " + first_line(e.what()));
-    }
+    train::write_training_state(temp, state, *optimizer_);
   });
 }
 
 int64_t OwoTrainer::resume(const std::string& dir) {
-  const std::string record_path = (fs::path(dir) / kRecordFile).string();
+  const std::string record_path = (fs::path(dir) / train::kTrainingStateFile).string();
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw InputError(dir, 0, "no such checkpoint directory to resume from");
-  const std::optional<OwoTrainingRecord> record = read_owo_training_record(dir);
-  if (!record) {
+  const std::optional<train::TrainingState> state = train::read_training_state(dir, "owo");
+  if (!state) {
     throw InputError(record_path, 0,
                      "missing: not a checkpoint written by `nec train owo`, nothing to resume; train into a new --out");
   }
-  const std::vector<FieldDifference> changed = differences(record->config, config_);
-  if (!changed.empty()) {
-    std::string what;
-    for (const FieldDifference& d : changed) {
-      what += (what.empty() ? "" : ", ") + std::string("'") + d.field + "' (checkpoint " + d.then + ", now " + d.now + ")";
-    }
-    throw InputError(record_path, 0,
-                     "cannot resume: the config differs in " + what +
-                         "; resume with the config it was trained with (only steps and the log, validation and "
-                         "checkpoint cadence may change), or train into a new --out");
-  }
+  train::check_resumable(*state, config_to_json(config_), kScheduleFields, record_path);
+  const std::optional<OwoTrainingRecord> record = read_owo_training_record(dir);
   std::set<std::string> then(record->train_skeletons.begin(), record->train_skeletons.end()), now;
   for (const PretrainSkeleton& s : skeletons_.train) now.insert(s.hash);
   if (then != now) {
@@ -639,15 +561,9 @@ int64_t OwoTrainer::resume(const std::string& dir) {
     auto buffers = loaded.model->named_buffers();
     for (auto& item : model_->named_buffers()) item.value().copy_(buffers[item.key()]);
   }
-  const std::string optimizer_path = (fs::path(dir) / kOptimizerFile).string();
-  if (!fs::is_regular_file(optimizer_path, ec)) {
-    throw InputError(optimizer_path, 0, "missing; the checkpoint is incomplete, cannot resume");
-  }
-  try {
-    torch::load(*optimizer_, optimizer_path, device_);
-  } catch (const c10::Error& e) {
-    throw InputError(optimizer_path, 0, "cannot read the optimizer state: " + first_line(e.what()));
-  }
+  train::load_optimizer_state(dir, *optimizer_, device_);
+  schedule_ = train::LearningRateSchedule::resumed(config_.optimizer, record->schedule, record->step, config_.steps,
+                                                   record_path);
   return record->step;
 }
 

@@ -4,7 +4,7 @@
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/owo/checkpoint.h"
-#include "nec/owo/checkpoint_io.h"
+#include "nec/train/checkpoint_io.h"
 
 #include <torch/torch.h>
 
@@ -21,7 +21,6 @@ constexpr const char* kArchitecture = "Tokenizer";
 constexpr const char* kConfigFile = "config.json";
 constexpr const char* kTensorFile = "tensors.pt";
 constexpr const char* kOwoDir = "owo";
-constexpr const char* kOptimizerFile = "optimizer.pt";
 constexpr const char* kTrainHint = "run `nec train tat` to make one";
 
 json to_json(const QuantizerConfig& c) {
@@ -48,7 +47,7 @@ json to_json(const TatConfig& c) {
 }
 
 TatConfig tat_config_from_json(const json& object, const std::string& file, const std::string& where) {
-  const owo::JsonFields fields(file, "fix the field or remove it to use the default");
+  const train::JsonFields fields(file, "fix the field or remove it to use the default");
   TatConfig c;
   // Every field is optional in a training config; present ones must have the right type.
   auto read = [&](const json& parent, const char* key, const std::string& prefix, auto& out) {
@@ -84,16 +83,12 @@ TatConfig tat_config_from_json(const json& object, const std::string& file, cons
 }
 
 void save_tat_checkpoint(const std::string& dir, TokenizerImpl& tokenizer, owo::OwoPretrainerImpl& owo,
-                         const TatCheckpointInfo& info, torch::optim::Optimizer* optimizer) {
-  owo::write_checkpoint_directory(dir, "a TAT checkpoint", [&](const std::string& temp) {
+                         const TatCheckpointInfo& info, const std::function<void(const std::string&)>& extra) {
+  train::write_checkpoint_directory(dir, "a TAT checkpoint", [&](const std::string& temp) {
     const fs::path root(temp);
     owo::save_owo_checkpoint((root / kOwoDir).string(), owo, {info.training_step, info.data});
-    owo::save_module_tensors(tokenizer, (root / kTensorFile).string());
-    if (optimizer != nullptr) {
-      torch::serialize::OutputArchive archive;
-      optimizer->save(archive);
-      archive.save_to((root / kOptimizerFile).string());
-    }
+    train::save_module_tensors(tokenizer, (root / kTensorFile).string());
+    if (extra) extra(temp);
     const json config = {{"format", kTatCheckpointFormat},
                          {"version", kTatCheckpointVersion},
                          {"architecture", kArchitecture},
@@ -102,7 +97,6 @@ void save_tat_checkpoint(const std::string& dir, TokenizerImpl& tokenizer, owo::
                          {"fps", info.fps},
                          {"training_step", info.training_step},
                          {"data", info.data},
-                         {"training", info.training},
                          {"tensors", kTensorFile},
                          {"owo", kOwoDir}};
     write_file_atomic((root / kConfigFile).string(), config.dump(2) + "\n");
@@ -110,9 +104,9 @@ void save_tat_checkpoint(const std::string& dir, TokenizerImpl& tokenizer, owo::
 }
 
 LoadedTatCheckpoint load_tat_checkpoint(const std::string& dir) {
-  const owo::CheckpointConfig config =
-      owo::read_checkpoint_config(dir, kTatCheckpointFormat, kTatCheckpointVersion, "a TAT checkpoint", kTrainHint);
-  const owo::JsonFields fields = config.fields();
+  const train::CheckpointConfig config =
+      train::read_checkpoint_config(dir, kTatCheckpointFormat, kTatCheckpointVersion, "a TAT checkpoint", kTrainHint);
+  const train::JsonFields fields = config.fields();
   const json& root = config.root;
   std::string architecture;
   fields.read(root, "architecture", "", architecture);
@@ -124,7 +118,6 @@ LoadedTatCheckpoint load_tat_checkpoint(const std::string& dir) {
   fields.read(root, "fps", "", loaded.info.fps);
   fields.read(root, "training_step", "", loaded.info.training_step);
   fields.read(root, "data", "", loaded.info.data);
-  loaded.info.training = root.value("training", json::object());
   std::string tensor_file, owo_dir;
   fields.read(root, "tensors", "", tensor_file);
   fields.read(root, "owo", "", owo_dir);
@@ -142,7 +135,7 @@ LoadedTatCheckpoint load_tat_checkpoint(const std::string& dir) {
   } catch (const std::invalid_argument& error) {
     fields.fail(std::string(error.what()) + "; " + fields.hint());
   }
-  owo::load_module_tensors(*loaded.tokenizer, (fs::path(dir) / tensor_file).string(), kTrainHint);
+  train::load_module_tensors(*loaded.tokenizer, (fs::path(dir) / tensor_file).string(), kTrainHint);
   loaded.owo = owo::load_owo_checkpoint((fs::path(dir) / owo_dir).string()).model;
   if (tokenizer_config.kind != TokenizerKind::ZeroPadRvq &&
       loaded.owo->encoder->config().dim != tokenizer_config.joint_embedding_dim) {
@@ -152,9 +145,6 @@ LoadedTatCheckpoint load_tat_checkpoint(const std::string& dir) {
   }
   loaded.tokenizer->eval();
   loaded.owo->eval();
-  const fs::path optimizer_path = fs::path(dir) / kOptimizerFile;
-  std::error_code ec;
-  if (fs::is_regular_file(optimizer_path, ec)) loaded.optimizer_path = optimizer_path.string();
   return loaded;
 }
 

@@ -1,6 +1,8 @@
 // Residual vector quantizer with EMA codebooks, dead-code reset and quantize dropout.
 #include "nec/tat/quantizer.h"
 
+#include "nec/train/distributed.h"
+
 #include <torch/torch.h>
 
 #include <stdexcept>
@@ -72,11 +74,16 @@ QuantizerOutput ResidualQuantizerImpl::forward(const at::Tensor& latent, const a
         torch::rand({1}, torch::kDouble).item<double>() < config_.quantize_dropout) {
       used_layers = torch::randint(1, layers + 1, {1}, torch::kLong).item<int64_t>();
     }
+    bool initialized = true;
     if (rows > 0) {
       const at::Tensor flags = torch::stack({weight.sum() > 0, initialized_}).to(torch::kCPU);  // one sync
       update = flags[0].item<bool>();
-      seed = update && !flags[1].item<bool>();
+      initialized = flags[1].item<bool>();
+    } else {
+      initialized = initialized_.item<bool>();
     }
+    // Every rank seeds alike, from the rows of all of them (even one whose rows are all masked).
+    seed = !initialized && (communicator_ != nullptr ? communicator_->any(update) : update);
   }
 
   at::Tensor codes = torch::full({rows, layers}, -1, latent.options().dtype(torch::kLong));
@@ -91,7 +98,9 @@ QuantizerOutput ResidualQuantizerImpl::forward(const at::Tensor& latent, const a
     for (int64_t r = 0; r < used_layers; ++r) {
       at::Tensor codebook = codebooks_[r];  // (K, C) view into the buffer
       if (seed) {
-        codebook.copy_(sample_rows(residual, weight, residual, size));
+        const at::Tensor candidates = all_ranks(torch::cat({residual, weight.unsqueeze(1)}, 1));  // (N', C + 1)
+        const at::Tensor candidate_rows = candidates.narrow(1, 0, dim);
+        codebook.copy_(sample_rows(candidate_rows, candidates.select(1, dim), candidate_rows, size));
         ema_sums_[r].copy_(codebook);
         ema_counts_[r].fill_(1.0);
       }
@@ -107,22 +116,17 @@ QuantizerOutput ResidualQuantizerImpl::forward(const at::Tensor& latent, const a
       perplexity.select(0, r).copy_(torch::exp(-(usage * torch::log(usage.clamp_min(1e-10))).sum()));
 
       if (update) {
-        const double decay = config_.ema_decay;
+        // Kept for update_codebooks(): the EMA moves once per optimizer step, from every part and rank.
         const at::Tensor sums = torch::zeros({size, dim}, float_options).index_add_(0, index, residual * weight.unsqueeze(1));
-        ema_counts_[r].mul_(decay).add_(counts, 1.0 - decay);
-        ema_sums_[r].mul_(decay).add_(sums, 1.0 - decay);
-        const at::Tensor total_count = ema_counts_[r].sum();
-        const at::Tensor smoothed =
-            (ema_counts_[r] + kLaplaceEpsilon) / (total_count + size * kLaplaceEpsilon) * total_count;
-        codebook.copy_(ema_sums_[r] / smoothed.unsqueeze(1));
+        if (!pending_counts_.defined()) {
+          pending_counts_ = torch::zeros_like(ema_counts_);
+          pending_sums_ = torch::zeros_like(ema_sums_);
+          pending_rows_.assign(static_cast<size_t>(layers), {});
+        }
+        pending_counts_[r].add_(counts);
+        pending_sums_[r].add_(sums);
         if (config_.dead_code_threshold > 0.0) {
-          // Codes used less than the threshold restart at kept residuals of this layer,
-          // preferring the rows its codes serve worst.
-          const at::Tensor dead = (ema_counts_[r] < config_.dead_code_threshold).unsqueeze(1);  // (K, 1)
-          const at::Tensor fresh = sample_rows(residual, weight, residual - chosen, size);
-          codebook.copy_(torch::where(dead, fresh, codebook));
-          ema_sums_[r].copy_(torch::where(dead, fresh * config_.dead_code_threshold, ema_sums_[r]));
-          ema_counts_[r].masked_fill_(dead.squeeze(1), config_.dead_code_threshold);
+          pending_rows_[static_cast<size_t>(r)].push_back(torch::cat({residual, residual - chosen, weight.unsqueeze(1)}, 1));
         }
       }
       total += chosen;
@@ -140,6 +144,60 @@ QuantizerOutput ResidualQuantizerImpl::forward(const at::Tensor& latent, const a
   out.codes = codes;
   out.perplexity = perplexity;
   return out;
+}
+
+at::Tensor ResidualQuantizerImpl::all_ranks(const at::Tensor& rows) const {
+  return communicator_ != nullptr ? communicator_->gather_rows(rows) : rows;
+}
+
+bool ResidualQuantizerImpl::update_codebooks() {
+  torch::NoGradGuard no_grad;
+  if (communicator_ == nullptr && !pending_counts_.defined()) return false;
+  if (!pending_counts_.defined()) {  // this rank kept no row: it still takes part in the sums
+    pending_counts_ = torch::zeros_like(ema_counts_);
+    pending_sums_ = torch::zeros_like(ema_sums_);
+    pending_rows_.assign(static_cast<size_t>(config_.layers), {});
+  }
+  if (communicator_ != nullptr) {
+    std::vector<at::Tensor> statistics{pending_counts_, pending_sums_};
+    communicator_->sum(statistics);
+  }
+  const int64_t size = config_.codebook_size, dim = config_.code_dim;
+  const at::Tensor layer_used = (pending_counts_.sum(1) > 0).to(torch::kCPU);  // (R), the same on every rank
+  bool updated = false;
+  for (int64_t r = 0; r < config_.layers; ++r) {
+    if (!layer_used[r].item<bool>()) continue;
+    updated = true;
+    at::Tensor codebook = codebooks_[r];
+    const double decay = config_.ema_decay;
+    ema_counts_[r].mul_(decay).add_(pending_counts_[r], 1.0 - decay);
+    ema_sums_[r].mul_(decay).add_(pending_sums_[r], 1.0 - decay);
+    const at::Tensor total_count = ema_counts_[r].sum();
+    const at::Tensor smoothed = (ema_counts_[r] + kLaplaceEpsilon) / (total_count + size * kLaplaceEpsilon) * total_count;
+    codebook.copy_(ema_sums_[r] / smoothed.unsqueeze(1));
+    if (config_.dead_code_threshold <= 0.0) continue;
+    // Codes used less than the threshold restart at kept residuals of this layer,
+    // preferring the rows its codes serve worst.
+    const at::Tensor dead = (ema_counts_[r] < config_.dead_code_threshold).unsqueeze(1);  // (K, 1)
+    if (!dead.any().item<bool>()) continue;
+    std::vector<at::Tensor>& kept_rows = pending_rows_[static_cast<size_t>(r)];
+    const at::Tensor local = kept_rows.empty() ? torch::zeros({0, 2 * dim + 1}, ema_sums_.options()) : torch::cat(kept_rows);
+    const at::Tensor candidates = all_ranks(local);  // (N, 2C + 1): residual, its error, weight
+    const at::Tensor fresh =
+        sample_rows(candidates.narrow(1, 0, dim), candidates.select(1, 2 * dim), candidates.narrow(1, dim, dim), size);
+    codebook.copy_(torch::where(dead, fresh, codebook));
+    ema_sums_[r].copy_(torch::where(dead, fresh * config_.dead_code_threshold, ema_sums_[r]));
+    ema_counts_[r].masked_fill_(dead.squeeze(1), config_.dead_code_threshold);
+  }
+  if (communicator_ != nullptr) {
+    // Rank 0's draws win: ranks whose generators drifted apart (unequal parts) keep one codebook.
+    std::vector<at::Tensor> state{codebooks_, ema_counts_, ema_sums_};
+    communicator_->broadcast(state, 0);
+  }
+  pending_counts_ = at::Tensor();
+  pending_sums_ = at::Tensor();
+  pending_rows_.clear();
+  return updated;
 }
 
 at::Tensor ResidualQuantizerImpl::codes_to_latent(const at::Tensor& codes) {

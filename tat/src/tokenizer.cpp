@@ -40,9 +40,9 @@ at::Tensor rest_pose_features(const at::TensorOptions& options) {
   return rest;
 }
 
-// A skeleton's OwO joint embeddings share a large common part (between Bandai's joints, left and right
-// alike, cosine 0.90-0.97): what tells its joints apart is the rest. Centred over the skeleton's real joints
-// and scaled to unit RMS: (B, J, E), mask (B, J) bool -> (B, J, E), zero at padded joints.
+// A skeleton's OwO joint embeddings share a large common part; what tells its joints apart is the rest.
+// Centred over the skeleton's real joints and scaled to unit RMS: (B, J, E), mask (B, J) bool -> (B, J, E),
+// zero at padded joints.
 at::Tensor distinct_joint_embeddings(const at::Tensor& embeddings, const at::Tensor& joint_mask) {
   const at::Tensor real = joint_mask.to(embeddings.scalar_type()).unsqueeze(-1);  // (B, J, 1)
   const at::Tensor count = real.sum(1, true).clamp_min(1.0);                       // (B, 1, 1)
@@ -215,10 +215,7 @@ class NecEncoderImpl : public detail::EncoderImpl {
   at::Tensor forward(const at::Tensor& features, const at::Tensor& joint_mask,
                      const at::Tensor& joint_embeddings) override {
     const at::Tensor joints = input_->forward(features) + embedding_(joint_embeddings).unsqueeze(1);  // (B, T, J, D)
-    // The virtual joint starts as the learnt vector plus the root's own input
-    // (joint 0 of every skeleton): the root trajectory, a few channels among
-    // J x 9, reaches the quantizer directly instead of only through attention,
-    // which lost it (a NEC-RVQ without this kept ~2 % of a walk's root speed).
+    // The learnt vector plus the root's own input: through attention alone the root trajectory was lost.
     const at::Tensor virtual_joint = virtual_joint_.view({1, 1, 1, -1}) + joints.narrow(2, 0, 1);  // (B, T, 1, D)
     at::Tensor tokens = torch::cat({virtual_joint, joints}, 2);
     const at::Tensor bias = key_bias(joint_mask, tokens.options());
@@ -246,9 +243,7 @@ class NecEncoderImpl : public detail::EncoderImpl {
 // NEC decoder: z_t as the virtual joint, MLP([z_t ‖ h_j]) per joint, then per
 // block spatial attention and a temporal upsampling block per token, linear to kModelChannels per joint. The
 // root's path in model space (Δx', Δz', yaw rate) is read from the virtual joint, which attends to itself
-// only: the same tokens give the same path, in body sizes, on every skeleton (read from the root joint, which
-// attends to the target's joints, one straight walk's tokens turned −60° on the MANN dog, −28° on the walk's own
-// skeleton: README, Measured).
+// only, so the same tokens give the same path, in body sizes, on every skeleton (docs/tokenizer.md).
 class NecDecoderImpl : public detail::DecoderImpl {
  public:
   explicit NecDecoderImpl(const TatConfig& config) {

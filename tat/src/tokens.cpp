@@ -3,7 +3,7 @@
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
-#include "nec/owo/checkpoint_io.h"
+#include "nec/train/checkpoint_io.h"
 
 #include <nlohmann/json.hpp>
 
@@ -46,7 +46,7 @@ void write_tokens(const std::string& path, const TokenFile& t) {
 }
 
 TokenFile read_tokens(const std::string& path) {
-  const owo::JsonFields fields(path, kHint);
+  const train::JsonFields fields(path, kHint);
   json root;
   try {
     root = json::parse(read_file(path, size_t{1} << 30));

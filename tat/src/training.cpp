@@ -1,17 +1,20 @@
-// Tokenizer training: config file, learning-rate schedule, steps and validation.
+// Tokenizer training: config file, steps, validation, checkpoints and resume.
 #include "nec/tat/training.h"
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
-#include "nec/owo/checkpoint_io.h"
 #include "nec/tat/batch_tensors.h"
 #include "nec/tat/checkpoint.h"
 #include "nec/tat/inference.h"
+#include "nec/train/checkpoint_io.h"
+#include "nec/train/distributed.h"
+#include "nec/train/training_state.h"
 
 #include <torch/torch.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <set>
 #include <stdexcept>
 
@@ -24,7 +27,17 @@ void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument("TatTrainConfig: " + message);
 }
 
-void reject_unknown(const json& object, const std::set<std::string>& known, const owo::JsonFields& fields,
+// Fields a resumed run may change.
+const std::set<std::string> kScheduleFields = {"steps", "log_every", "validate_every", "checkpoint_every"};
+
+// The loss terms of a step, in the order they are summed over the ranks.
+std::vector<std::string> term_names(int64_t layers) {
+  std::vector<std::string> names{"loss", "rotation", "root", "position", "velocity", "commitment"};
+  for (int64_t r = 0; r < layers; ++r) names.push_back("perplexity" + std::to_string(r));
+  return names;
+}
+
+void reject_unknown(const json& object, const std::set<std::string>& known, const train::JsonFields& fields,
                     const std::string& where) {
   for (const auto& item : object.items()) {
     if (!known.count(item.key())) fields.fail("unknown field '" + where + item.key() + "'");
@@ -36,18 +49,20 @@ void reject_unknown(const json& object, const std::set<std::string>& known, cons
 void TatTrainConfig::validate() const {
   model.validate();
   loss.validate();
-  require(learning_rate > 0 && final_learning_rate >= 0 && final_learning_rate <= learning_rate,
-          "need learning_rate > 0 and 0 <= final_learning_rate <= learning_rate");
-  require(warmup_steps >= 0 && weight_decay >= 0 && grad_clip >= 0,
-          "warmup_steps, weight_decay and grad_clip must be >= 0");
+  try {
+    optimizer.validate();
+  } catch (const std::invalid_argument& e) {
+    require(false, std::string("optimizer.") + e.what());
+  }
   require(steps >= 1 && batch_size >= 1, "steps and batch_size must be >= 1");
   require(window_frames >= model.downsampling() && window_frames % model.downsampling() == 0,
           "window_frames must be a positive multiple of the downsampling " + std::to_string(model.downsampling()) +
               ", got " + std::to_string(window_frames));
   require(augment_probability >= 0 && augment_probability <= 1, "augment_probability must be in [0, 1]");
   require(joint_buckets >= 0 && max_joint_frames >= 0, "joint_buckets and max_joint_frames must be >= 0");
-  require(log_every >= 1 && validate_every >= 1 && checkpoint_every >= 1 && validation_batches >= 1,
-          "log_every, validate_every, checkpoint_every and validation_batches must be >= 1");
+  require(log_every >= 0 && validate_every >= 0 && checkpoint_every >= 0,
+          "log_every, validate_every and checkpoint_every must be >= 0 (0: only at the end; validation: never)");
+  require(validation_batches >= 1, "validation_batches must be >= 1");
 }
 
 json to_json(const TatTrainConfig& c) {
@@ -57,11 +72,12 @@ json to_json(const TatTrainConfig& c) {
             {"root", c.loss.root},
             {"position", c.loss.position},
             {"velocity", c.loss.velocity}}},
-          {"learning_rate", c.learning_rate},
-          {"final_learning_rate", c.final_learning_rate},
-          {"warmup_steps", c.warmup_steps},
-          {"weight_decay", c.weight_decay},
-          {"grad_clip", c.grad_clip},
+          {"optimizer",
+           {{"learning_rate", c.optimizer.learning_rate},
+            {"final_lr_fraction", c.optimizer.final_lr_fraction},
+            {"warmup_steps", c.optimizer.warmup_steps},
+            {"weight_decay", c.optimizer.weight_decay},
+            {"grad_clip", c.optimizer.grad_clip}}},
           {"steps", c.steps},
           {"batch_size", c.batch_size},
           {"window_frames", c.window_frames},
@@ -76,11 +92,10 @@ json to_json(const TatTrainConfig& c) {
 }
 
 TatTrainConfig tat_train_config_from_json(const json& object, const std::string& file) {
-  const owo::JsonFields fields(file, "see configs/tat_cpu.json for every field and its default");
+  const train::JsonFields fields(file, "see configs/tat_cpu.json for every field and its default");
   if (!object.is_object()) fields.fail("a training config must be a JSON object");
   reject_unknown(object,
-                 {"model", "loss", "learning_rate", "final_learning_rate", "warmup_steps", "weight_decay", "grad_clip",
-                  "steps", "batch_size", "window_frames", "augment_probability", "joint_buckets", "max_joint_frames",
+                 {"model", "loss", "optimizer", "steps", "batch_size", "window_frames", "augment_probability", "joint_buckets", "max_joint_frames",
                   "log_every", "validate_every", "validation_batches", "checkpoint_every", "seed", "comment"},
                  fields, "");
   TatTrainConfig c;
@@ -108,11 +123,16 @@ TatTrainConfig tat_train_config_from_json(const json& object, const std::string&
     read(loss, "position", "loss.", c.loss.position);
     read(loss, "velocity", "loss.", c.loss.velocity);
   }
-  read(object, "learning_rate", "", c.learning_rate);
-  read(object, "final_learning_rate", "", c.final_learning_rate);
-  read(object, "warmup_steps", "", c.warmup_steps);
-  read(object, "weight_decay", "", c.weight_decay);
-  read(object, "grad_clip", "", c.grad_clip);
+  if (object.contains("optimizer")) {
+    const json& optimizer = fields.object(object, "optimizer", "");
+    reject_unknown(optimizer, {"learning_rate", "final_lr_fraction", "warmup_steps", "weight_decay", "grad_clip"},
+                   fields, "optimizer.");
+    read(optimizer, "learning_rate", "optimizer.", c.optimizer.learning_rate);
+    read(optimizer, "final_lr_fraction", "optimizer.", c.optimizer.final_lr_fraction);
+    read(optimizer, "warmup_steps", "optimizer.", c.optimizer.warmup_steps);
+    read(optimizer, "weight_decay", "optimizer.", c.optimizer.weight_decay);
+    read(optimizer, "grad_clip", "optimizer.", c.optimizer.grad_clip);
+  }
   read(object, "steps", "", c.steps);
   read(object, "batch_size", "", c.batch_size);
   read(object, "window_frames", "", c.window_frames);
@@ -142,30 +162,73 @@ TatTrainConfig read_tat_train_config(const std::string& path) {
   return tat_train_config_from_json(root, path);
 }
 
-double learning_rate_at(const TatTrainConfig& c, int64_t step) {
-  if (step < c.warmup_steps) return c.learning_rate * static_cast<double>(step + 1) / static_cast<double>(c.warmup_steps);
-  const double span = std::max<int64_t>(1, c.steps - c.warmup_steps);
-  const double progress = std::min(1.0, static_cast<double>(step - c.warmup_steps) / span);
-  return c.final_learning_rate + 0.5 * (c.learning_rate - c.final_learning_rate) * (1.0 + std::cos(M_PI * progress));
-}
-
 struct TatTrainer::Inputs {
   BatchTensors batch;
   at::Tensor embeddings;  // (B, J, D) or undefined
 };
 
-TatTrainer::TatTrainer(Tokenizer tokenizer, owo::OwoPretrainer owo, const TatTrainConfig& config,
-                       const text::WordVectors* vectors, const c10::Device& device)
-    : tokenizer_(std::move(tokenizer)), owo_(std::move(owo)), config_(config), vectors_(vectors), device_(device) {
+TatTrainer::TatTrainer(const TatTrainConfig& config, const DatasetCache& cache, std::string data_name,
+                       owo::OwoPretrainer owo, const text::WordVectors* vectors, const c10::Device& device,
+                       const train::Communicator* ranks)
+    : config_(config),
+      cache_(cache),
+      data_name_(std::move(data_name)),
+      owo_(std::move(owo)),
+      vectors_(vectors),
+      device_(device),
+      ranks_(ranks),
+      schedule_(config.optimizer, config.steps) {
   config_.validate();
+  torch::manual_seed(static_cast<uint64_t>(config_.seed));  // the initial weights and codebooks
+  tokenizer_ = Tokenizer(config_.model);
   tokenizer_->to(device_);
   tokenizer_->train();
+  tokenizer_->set_communicator(ranks_);
   owo_->to(device_);
   owo_->eval();
   for (auto& parameter : owo_->parameters()) parameter.set_requires_grad(false);
-  optimizer_ = std::make_unique<torch::optim::AdamW>(
-      tokenizer_->parameters(),
-      torch::optim::AdamWOptions(config_.learning_rate).weight_decay(config_.weight_decay));
+  optimizer_ = train::make_adamw(tokenizer_->parameters(), config_.optimizer);
+
+  BatchOptions batches;
+  batches.batch_size = static_cast<int>(config_.batch_size);
+  batches.crop_frames = static_cast<int>(config_.window_frames);
+  batches.seed = config_.seed;
+  batches.drop_last = true;
+  batches.augment_probability = config_.augment_probability;
+  batches.joint_buckets = static_cast<int>(config_.joint_buckets);
+  if (config_.model.kind == TokenizerKind::ZeroPadRvq) {
+    // Subdivision adds joints beyond the fixed channel layout of the padding baseline.
+    batches.augment_kinds = {AugmentKind::RestPose, AugmentKind::BoneLength, AugmentKind::JointRemoval};
+  }
+  BatchOptions validation = batches;
+  validation.augment_probability = 0.0;
+  validation.joint_buckets = 0;
+  validation.shuffle = false;
+  validation.drop_last = false;
+  if (ranks_ != nullptr) {
+    if (config_.batch_size < ranks_->world_size()) {
+      throw std::invalid_argument("batch_size " + std::to_string(config_.batch_size) + " is smaller than the " +
+                                  std::to_string(ranks_->world_size()) + " ranks: each rank needs a share");
+    }
+    batches.shard_rank = ranks_->rank();
+    batches.shard_count = ranks_->world_size();
+  }
+  const int64_t train_clips = static_cast<int64_t>(cache.clips_in(Split::Train).size());
+  if (train_clips < config_.batch_size) {
+    throw InputError(data_name_, 0,
+                     "the train split has " + std::to_string(train_clips) + " clips, fewer than one batch of " +
+                         std::to_string(config_.batch_size));
+  }
+  train_ = std::make_unique<BatchLoader>(cache, Split::Train, batches);
+  if (!cache.clips_in(Split::Val).empty()) validation_ = std::make_unique<BatchLoader>(cache, Split::Val, validation);
+}
+
+TatTrainer::~TatTrainer() = default;
+
+int64_t TatTrainer::parameter_count() const {
+  int64_t count = 0;
+  for (const at::Tensor& p : tokenizer_->parameters()) count += p.numel();
+  return count;
 }
 
 TatTrainer::Inputs TatTrainer::inputs(const Batch& batch) {
@@ -183,7 +246,7 @@ int64_t items_per_part(int64_t items, int64_t joint_frames_per_item, int64_t max
 }
 
 LossTerms backward_in_parts(Tokenizer& tokenizer, const BatchTensors& batch, const at::Tensor& embeddings,
-                            const LossWeights& weights, int64_t max_joint_frames) {
+                            const LossWeights& weights, int64_t max_joint_frames, double batch_share) {
   const int64_t items = batch.features.size(0);
   const int64_t part_items =
       items_per_part(items, batch.features.size(1) * batch.features.size(2), max_joint_frames);
@@ -191,7 +254,7 @@ LossTerms backward_in_parts(Tokenizer& tokenizer, const BatchTensors& batch, con
   at::Tensor perplexity;
   for (int64_t begin = 0; begin < items; begin += part_items) {
     const int64_t count = std::min(part_items, items - begin);
-    const double share = static_cast<double>(count) / static_cast<double>(items);
+    const double share = batch_share * static_cast<double>(count) / static_cast<double>(items);
     const BatchTensors part = batch.items(begin, count);
     const TokenizerOutput out = tokenizer->forward(part.features, part.joint_mask, part.frame_mask,
                                                    embeddings.defined() ? embeddings.narrow(0, begin, count) : embeddings);
@@ -210,21 +273,101 @@ LossTerms backward_in_parts(Tokenizer& tokenizer, const BatchTensors& batch, con
   return terms;
 }
 
-LossTerms TatTrainer::step(const Batch& batch, int64_t step_index) {
+LossTerms TatTrainer::step(int64_t step) { return step_on(train_->next(), step); }
+
+LossTerms TatTrainer::step_on(const Batch& batch, int64_t step) {
   // The step's random draws (quantize dropout, dead-code reset) depend on the
   // seed and the step alone: a run is repeatable, and a resumed run takes the
   // steps of one that never stopped.
-  torch::manual_seed(static_cast<uint64_t>(config_.seed) * 1000003u + static_cast<uint64_t>(step_index));
-  const double lr = learning_rate_at(config_, step_index);
-  for (auto& group : optimizer_->param_groups()) static_cast<torch::optim::AdamWOptions&>(group.options()).lr(lr);
-  const Inputs in = inputs(batch);
+  torch::manual_seed(static_cast<uint64_t>(config_.seed) * 1000003u + static_cast<uint64_t>(step - 1));
+  const double share = batch.global_size > 0 ? static_cast<double>(batch.size) / batch.global_size : 1.0;
   tokenizer_->train();
   optimizer_->zero_grad();
-  LossTerms terms = backward_in_parts(tokenizer_, in.batch, in.embeddings, config_.loss, config_.max_joint_frames);
-  if (config_.grad_clip > 0) torch::nn::utils::clip_grad_norm_(tokenizer_->parameters(), config_.grad_clip);
-  optimizer_->step();
-  terms["lr"] = lr;
+  LossTerms terms;
+  if (batch.size > 0) {
+    const Inputs in = inputs(batch);
+    terms = backward_in_parts(tokenizer_, in.batch, in.embeddings, config_.loss, config_.max_joint_frames, share);
+  }
+  const train::OptimizerStep taken = train::optimizer_step(*optimizer_, tokenizer_->parameters(), config_.optimizer.grad_clip,
+                                                           schedule_.at(step), ranks_);
+  tokenizer_->update_codebooks();
+  if (ranks_ != nullptr) {
+    // Every rank reports the whole batch's terms; each term is named by every rank (the same model).
+    const std::vector<std::string> names = term_names(config_.model.quantizer.layers);
+    at::Tensor values = torch::zeros({static_cast<int64_t>(names.size())}, torch::kDouble);
+    for (size_t i = 0; i < names.size(); ++i) {
+      const auto found = terms.find(names[i]);
+      if (found != terms.end()) values[static_cast<int64_t>(i)] = found->second;
+    }
+    std::vector<at::Tensor> summed{values};
+    ranks_->sum(summed);
+    for (size_t i = 0; i < names.size(); ++i) terms[names[i]] = summed[0][static_cast<int64_t>(i)].item<double>();
+  }
+  terms["grad_norm"] = taken.grad_norm;
+  terms["lr"] = schedule_.at(step);
   return terms;
+}
+
+std::optional<ReconstructionMetrics> TatTrainer::validate() {
+  if (!validation_) return std::nullopt;
+  ReconstructionMetrics metrics;
+  const int count = std::min<int>(static_cast<int>(config_.validation_batches), validation_->batches_per_epoch());
+  for (int i = 0; i < count; ++i) metrics.add(evaluate(validation_->batch(0, i)));
+  return metrics;
+}
+
+void TatTrainer::save(const std::string& dir, int64_t step) {
+  TatCheckpointInfo info;
+  info.window_frames = config_.window_frames;
+  info.fps = cache_.fps;
+  info.training_step = step;
+  info.data = data_name_ + " (" + std::to_string(train_->clip_count()) + " train clips)";
+  train::TrainingState state;
+  state.model = "tat";
+  state.step = step;
+  state.config = to_json(config_);
+  state.schedule = schedule_.to_json();
+  state.data = {{"epoch", train_->epoch()}, {"index", train_->index()}};
+  save_tat_checkpoint(dir, *tokenizer_, *owo_, info,
+                      [&](const std::string& temp) { train::write_training_state(temp, state, *optimizer_); });
+}
+
+int64_t TatTrainer::resume(const std::string& dir) {
+  const std::string state_path = (std::filesystem::path(dir) / train::kTrainingStateFile).string();
+  const std::optional<train::TrainingState> state = train::read_training_state(dir, "tat");
+  if (!state) {
+    throw InputError(state_path, 0,
+                     "missing: not a checkpoint written by `nec train tat`, nothing to resume; train into a new --out");
+  }
+  train::check_resumable(*state, to_json(config_), kScheduleFields, state_path);
+  LoadedTatCheckpoint loaded = load_tat_checkpoint(dir);
+  if (loaded.info.training_step != state->step) {
+    throw InputError(state_path, 0,
+                     "step " + std::to_string(state->step) + " but config.json says " +
+                         std::to_string(loaded.info.training_step) + "; the checkpoint is damaged");
+  }
+  {
+    torch::NoGradGuard no_grad;
+    auto parameters = loaded.tokenizer->named_parameters();
+    for (auto& item : tokenizer_->named_parameters()) item.value().copy_(parameters[item.key()]);
+    auto buffers = loaded.tokenizer->named_buffers();
+    for (auto& item : tokenizer_->named_buffers()) item.value().copy_(buffers[item.key()]);
+  }
+  train::load_optimizer_state(dir, *optimizer_, device_);
+  schedule_ = train::LearningRateSchedule::resumed(config_.optimizer, state->schedule, state->step, config_.steps,
+                                                   state_path);
+  const train::JsonFields fields(state_path, "the training state is damaged; train again into a new --out");
+  int64_t epoch = 0, index = 0;
+  fields.read(state->data, "epoch", "data.", epoch);
+  fields.read(state->data, "index", "data.", index);
+  try {
+    train_->seek(static_cast<int>(epoch), static_cast<int>(index));
+  } catch (const std::out_of_range&) {
+    throw InputError(state_path, 0,
+                     "batch " + std::to_string(index) + " of epoch " + std::to_string(epoch) +
+                         " is not in this train split; resume with the same --data, or train into a new --out");
+  }
+  return state->step;
 }
 
 ReconstructionMetrics TatTrainer::evaluate(const Batch& batch) {

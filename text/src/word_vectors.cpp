@@ -3,6 +3,7 @@
 #include "nec/text/word_vectors.h"
 
 #include "nec/motion/error.h"
+#include "nec/motion/files.h"
 #include "nec/motion/names.h"
 
 
@@ -17,8 +18,6 @@
 #include <queue>
 #include <stdexcept>
 #include <utility>
-
-#include <unistd.h>
 
 #ifndef NEC_REPOSITORY_DIR
 #define NEC_REPOSITORY_DIR "."
@@ -131,6 +130,16 @@ float cosine_similarity(const Vector& a, const Vector& b) {
   }
   if (aa == 0 || bb == 0) return 0;
   return static_cast<float>(dot / std::sqrt(aa * bb));
+}
+
+WordVectors WordVectors::load_checked(const std::string& path, int64_t dim) {
+  WordVectors vectors = load(path.empty() ? default_word_vectors_path() : path);
+  if (vectors.dim() != dim) {
+    throw InputError(vectors.path(), 0,
+                     "holds " + std::to_string(vectors.dim()) + "-d vectors, but the model reads " +
+                         std::to_string(dim) + "-d names; pass the --glove file it was trained with");
+  }
+  return vectors;
 }
 
 WordVectors WordVectors::load(const std::string& path) {
@@ -316,20 +325,16 @@ uint64_t write_word_vectors(const std::string& path, const std::vector<std::stri
     std::error_code ignored;
     std::filesystem::create_directories(target.parent_path(), ignored);
   }
-  const std::string temporary = path + ".tmp" + std::to_string(::getpid());
-  std::FILE* file = std::fopen(temporary.c_str(), "wb");
-  if (file == nullptr) throw InputError(path, 0, std::string("cannot write (") + std::strerror(errno) + ")");
-  bool ok = std::fwrite(head.data(), 1, head.size(), file) == head.size();
-  for (size_t i = 0; ok && i < order.size(); ++i)
-    ok = std::fwrite(vectors.data() + order[i] * static_cast<size_t>(dim), sizeof(float), static_cast<size_t>(dim),
-                     file) == static_cast<size_t>(dim);
-  ok = (std::fflush(file) == 0) && ok;
-  ok = (::fsync(::fileno(file)) == 0) && ok;
-  ok = (std::fclose(file) == 0) && ok;
-  if (!ok || std::rename(temporary.c_str(), path.c_str()) != 0) {
-    const std::string reason = std::strerror(errno);
-    std::remove(temporary.c_str());
-    throw InputError(path, 0, "cannot write (" + reason + ")");
+  std::string contents(head.begin(), head.end());
+  contents.reserve(head.size() + order.size() * static_cast<size_t>(dim) * sizeof(float));
+  for (const size_t index : order) {
+    contents.append(reinterpret_cast<const char*>(vectors.data() + index * static_cast<size_t>(dim)),
+                    static_cast<size_t>(dim) * sizeof(float));
+  }
+  try {
+    write_file_atomic(path, contents);
+  } catch (const std::runtime_error& e) {
+    throw InputError(path, 0, e.what());
   }
   return vectors_offset + 4 * static_cast<uint64_t>(words.size()) * static_cast<uint64_t>(dim);
 }

@@ -25,6 +25,14 @@
 
 namespace nec {
 
+// One process's share of a global batch of `items` in data-parallel training:
+// a contiguous range, the first `items % world_size` ranks taking one more.
+struct BatchShare {
+  int64_t begin = 0;  // first item of the share
+  int64_t count = 0;  // its items (0 when items < world_size for the last ranks)
+};
+BatchShare share_of(int64_t items, int rank, int world_size);
+
 struct BatchOptions {
   int batch_size = 32;              // B (the last batch of an epoch may be smaller unless drop_last)
   int crop_frames = 64;             // T, e.g. 64; shorter clips are padded and masked; 0 = whole clips, T = longest in the batch
@@ -37,6 +45,8 @@ struct BatchOptions {
   double augment_probability = 0.0; // chance that an item's rig is augmented, e.g. 0.5
   std::vector<AugmentKind> augment_kinds{AugmentKind::RestPose, AugmentKind::BoneLength, AugmentKind::JointRemoval,
                                          AugmentKind::Subdivision};  // one is drawn uniformly per augmented item
+  int shard_rank = 0;               // data-parallel: a batch holds only this rank's share_of its B items,
+  int shard_count = 1;              // of shard_count ranks; each item is the one a single process draws
 
   // Throws std::invalid_argument naming the bad field.
   void validate() const;
@@ -44,7 +54,8 @@ struct BatchOptions {
 
 // One batch. Row-major arrays; shapes in the comments; padding is zero (parents -1).
 struct Batch {
-  int size = 0;        // B, items
+  int size = 0;        // B, items (of this rank's share when sharded)
+  int global_size = 0; // items of the whole batch over every shard (= size unsharded)
   int frames = 0;      // T, frames per item (crop_frames, or the longest clip when crop_frames = 0)
   int max_joints = 0;  // Jmax, most joints of any item (after augmentation)
 

@@ -10,9 +10,13 @@ namespace nec {
 
 // Throws InputError naming the file when it cannot be read or exceeds max_bytes.
 std::string read_file(const std::string& path, size_t max_bytes = size_t{1} << 32);
-// Writes `contents` to `path` through a temporary file in the same directory.
-// Throws std::runtime_error naming the file on failure.
+// Writes `contents` to `path` through a temporary file in the same directory,
+// flushed to disk (fsync) before it is renamed into place, and the directory
+// after: a crash leaves the old file or the new one. Throws std::runtime_error
+// naming the file on failure.
 void write_file_atomic(const std::string& path, std::string_view contents);
+// fsync of a file or a directory; throws std::runtime_error naming it on failure.
+void sync_to_disk(const std::string& path);
 
 // Removes a file or a whole directory tree; symbolic links are removed, never
 // followed; a missing path is no error. Returns "" on success, else why the

@@ -2,8 +2,10 @@
 // C.3): geometric, topological and semantic tasks on rest-pose skeletons.
 //
 //   OwoPretrainer model(encoder_config, PretrainConfig{});
-//   torch::optim::AdamW optimizer(model->parameters(), torch::optim::AdamWOptions(1e-3));
-//   PretrainLosses l = model->pretrain_step(collate(graphs, encoder_config.name_dim), optimizer);
+//   auto optimizer = train::make_adamw(model->parameters(), train::OptimizerConfig{});
+//   optimizer->zero_grad();
+//   PretrainLosses l = model->backward(collate(graphs, encoder_config.name_dim));
+//   train::optimizer_step(*optimizer, model->parameters(), /*max_grad_norm=*/1.0, /*learning_rate=*/1e-3);
 //   // l.total, *l.offset, *l.lca, l.lca_accuracy, ...; afterwards keep model->encoder
 //
 // Tasks (each switched by a flag; a term that did not run is std::nullopt):
@@ -26,10 +28,6 @@
 #include "nec/owo/encoder.h"
 
 #include <optional>
-
-namespace torch::optim {
-class Optimizer;
-}
 
 namespace nec::owo {
 
@@ -57,7 +55,7 @@ struct PretrainLosses {
   std::optional<double> lca;          // mean cross-entropy over sampled pairs
   std::optional<double> name;         // InfoNCE over named joints
   std::optional<double> lca_accuracy; // fraction of sampled pairs whose argmax is the LCA
-  std::optional<double> grad_norm;    // global gradient norm before clipping (the clipping pretrain_step only)
+  std::optional<double> grad_norm;    // global gradient norm before clipping (set by OwoTrainer::step)
 };
 
 // a(i, k) of the LCA pointer for every ordered joint pair: an MLP over
@@ -85,12 +83,10 @@ class OwoPretrainerImpl : public torch::nn::Module {
  public:
   OwoPretrainerImpl(const OwoConfig& encoder_config, const PretrainConfig& config);
 
-  // One optimizer step on `batch`; returns the terms before the step.
-  PretrainLosses pretrain_step(const GraphBatch& batch, torch::optim::Optimizer& optimizer);
-  // The same with the global gradient norm clipped to `max_grad_norm` (0: no
-  // clipping; the norm is reported either way). When the total or the norm is
-  // NaN or infinite, no step is taken and the model stays as it was.
-  PretrainLosses pretrain_step(const GraphBatch& batch, torch::optim::Optimizer& optimizer, double max_grad_norm);
+  // The terms on `batch`, with the gradients of `loss_scale` × total added to
+  // the parameters' (the caller zeroes them and steps the optimizer:
+  // train::optimizer_step). `loss_scale` is a rank's share of a global batch.
+  PretrainLosses backward(const GraphBatch& batch, double loss_scale = 1.0);
   // The terms on `batch` without gradients (training mode untouched).
   PretrainLosses evaluate(const GraphBatch& batch);
   // LCA pointer logits for every pair (j1, j2) of every skeleton, without

@@ -1,6 +1,6 @@
-// OwO pretraining runs (`nec train owo`): the JSON training config, the
-// learning-rate schedule, a trainer that draws augmented batches from a
-// SkeletonSet and takes AdamW steps, and training checkpoints that resume.
+// OwO pretraining runs (`nec train owo`): the JSON training config, a trainer
+// that draws augmented batches from a SkeletonSet and takes AdamW steps
+// (train/optimizer.h), and training checkpoints that resume.
 //
 //   OwoTrainingConfig config = parse_owo_training_config(read_file("configs/owo_cpu.json"), "configs/owo_cpu.json");
 //   OwoTrainer trainer(config, split_skeleton_set(all, config.hold_out()), &vectors, torch::kCPU);
@@ -10,12 +10,9 @@
 //   }
 //
 // A training checkpoint is an OwO checkpoint (checkpoint.h; what `nec eval
-// owo` and later models load) plus, in the same directory and replaced with it
-// atomically:
-//   training.json   {"format": "nec-owo-training", "version": 1, "step": 1200, "config": {...},
-//                    "data": ["runs/cache"], "train_skeletons": [hash...], "held_out_skeletons": [hash...],
-//                    "optimizer": "optimizer.pt"}
-//   optimizer.pt    the AdamW state
+// owo` and later models load) plus the training state (train/training_state.h,
+// model "owo") in the same directory, replaced with it atomically; its data
+// record is {"caches": [...], "train_skeletons": [hash...], "held_out_skeletons": [hash...]}.
 // Steps draw their batch, augmentations and sampled pairs from (seed, step)
 // alone, so a resumed run takes the same steps as one that never stopped.
 #pragma once
@@ -24,8 +21,10 @@
 #include "nec/owo/pretrain.h"
 #include "nec/owo/skeleton_set.h"
 #include "nec/text/word_vectors.h"
+#include "nec/train/optimizer.h"
 
 #include <c10/core/Device.h>
+#include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <memory>
@@ -36,22 +35,11 @@
 namespace torch::optim {
 class AdamW;
 }
+namespace nec::train {
+class Communicator;
+}
 
 namespace nec::owo {
-
-constexpr const char* kOwoTrainingFormat = "nec-owo-training";  // training.json "format"
-constexpr int kOwoTrainingVersion = 1;                          // training.json "version"
-
-// AdamW with linear warm-up, then cosine decay to final_lr_fraction * lr at the last step.
-struct OwoOptimizerConfig {
-  double lr = 1e-3;                // peak learning rate, e.g. 1e-3 (small CPU model), 2e-4 (paper size)
-  double weight_decay = 0.01;      // AdamW decoupled weight decay, e.g. 0.01
-  int64_t warmup_steps = 100;      // linear warm-up from lr / warmup_steps, e.g. 100
-  double final_lr_fraction = 0.1;  // the learning rate at the last step, as a fraction of lr
-  double grad_clip = 1.0;          // largest global gradient norm; 0 = no clipping
-
-  void validate() const;  // throws std::invalid_argument naming the field
-};
 
 // Which skeletons train and which are held out, and how they are augmented.
 struct OwoDataConfig {
@@ -77,7 +65,7 @@ inline OwoConfig default_training_encoder() {
 struct OwoTrainingConfig {
   OwoConfig encoder = default_training_encoder();  // saved with the model
   PretrainConfig pretrain;       // saved with the model
-  OwoOptimizerConfig optimizer;
+  train::OptimizerConfig optimizer;  // AdamW, warm-up + cosine (train/optimizer.h)
   OwoDataConfig data;
   bool names = true;             // feed joint-name embeddings; encoder.name_dim must equal the word vectors' dim
   int64_t batch_size = 16;       // skeletons per step at most, e.g. 16
@@ -88,23 +76,20 @@ struct OwoTrainingConfig {
   int64_t checkpoint_every = 500;  // checkpoint every N steps; always at the end
   uint64_t seed = 1;             // model init, batches, augmentation, sampled pairs
 
-  void validate() const;  // throws std::invalid_argument naming the field, e.g. "optimizer.lr must be > 0"
+  void validate() const;  // throws std::invalid_argument naming the field, e.g. "optimizer.learning_rate must be ..."
   HoldOut hold_out() const { return HoldOut{data.held_out, data.cache_held_out}; }
 };
 
 // Parses a config file's text; `file` names it in errors. Throws nec::InputError
-// "file: field 'optimizer.lr' must be a number" (also for unknown fields, bad
+// "file: field 'optimizer.learning_rate' must be a number" (also for unknown fields, bad
 // JSON and failed validation).
 OwoTrainingConfig parse_owo_training_config(const std::string& text, const std::string& file);
 // Every field, as a JSON document that parse_owo_training_config reads back.
 std::string owo_training_config_json(const OwoTrainingConfig& config);
-// The dotted fields whose values differ, e.g. {"optimizer.lr"}; the schedule
+// The dotted fields whose values differ, e.g. {"optimizer.learning_rate"}; the schedule
 // fields (steps, log_every, validate_every, checkpoint_every) are left out:
 // a resumed run may change them.
 std::vector<std::string> differing_fields(const OwoTrainingConfig& a, const OwoTrainingConfig& b);
-
-// Learning rate at `step` (1-based) of `total_steps`.
-double learning_rate(const OwoOptimizerConfig& optimizer, int64_t step, int64_t total_steps);
 
 // Reads every cache (nec::read_cache) and splits their skeletons: the
 // skeleton set of a run. Throws nec::InputError naming the cache when one
@@ -112,14 +97,11 @@ double learning_rate(const OwoOptimizerConfig& optimizer, int64_t step, int64_t 
 SkeletonSet load_skeleton_set(const std::vector<std::string>& caches, const HoldOut& hold_out,
                               int64_t poses_per_skeleton, uint64_t seed);
 
-// "cpu", "cuda" or "cuda:N" as a device. Throws std::invalid_argument for
-// another name, std::runtime_error when this torch has no CUDA device.
-c10::Device training_device(const std::string& name);
-
-// training.json of a training checkpoint.
+// The training state of an OwO training checkpoint.
 struct OwoTrainingRecord {
   int64_t step = 0;
   OwoTrainingConfig config;
+  nlohmann::json schedule;                      // train::LearningRateSchedule::to_json
   std::vector<std::string> data;                // the caches, as given to nec train owo
   std::vector<std::string> train_skeletons;     // content hashes
   std::vector<std::string> held_out_skeletons;  // content hashes
@@ -134,14 +116,17 @@ class OwoTrainer {
  public:
   // `vectors` must outlive the trainer; nullptr trains without names (config.names false).
   // Throws std::invalid_argument for an empty training set or names of the wrong width.
+  // `ranks`: the other processes of a data-parallel run (null: one process);
+  // each step then trains on this rank's share of the batch.
   OwoTrainer(const OwoTrainingConfig& config, SkeletonSet skeletons, const text::WordVectors* vectors,
-             const c10::Device& device);
+             const c10::Device& device, const train::Communicator* ranks = nullptr);
   ~OwoTrainer();
   OwoTrainer(const OwoTrainer&) = delete;
   OwoTrainer& operator=(const OwoTrainer&) = delete;
 
   // One optimizer step at `step` (1-based): learning rate from the schedule,
-  // a batch of augmented training skeletons drawn from (seed, step).
+  // a batch of augmented training skeletons drawn from (seed, step). The terms
+  // are the whole batch's (summed over the ranks by their shares).
   PretrainLosses step(int64_t step);
   // Scores on the held-out (or training) skeletons, un-augmented.
   std::vector<SkeletonScore> score_held_out();
@@ -162,11 +147,14 @@ class OwoTrainer {
 
  private:
   at::Tensor names_of(const std::vector<std::string>& canonical_names) const;
+  PretrainLosses summed_over_ranks(const PretrainLosses& local, double weight) const;
 
   OwoTrainingConfig config_;
   SkeletonSet skeletons_;
   const text::WordVectors* vectors_;
   c10::Device device_;
+  const train::Communicator* ranks_;
+  train::LearningRateSchedule schedule_;
   OwoPretrainer model_{nullptr};
   std::unique_ptr<torch::optim::AdamW> optimizer_;
   std::vector<std::vector<size_t>> buckets_;  // training skeleton indices by joint count, smallest first

@@ -4,20 +4,7 @@
 //   at::Tensor m = features_to_model_space(x.features);           // (B, T, J, 9) -> (B, T, J, kModelChannels)
 //   at::Tensor back = model_space_to_features(m, start_heading(x.features));  // Θ again (float rounding)
 //
-// Θ keeps the root's absolute orientation per frame and its displacement Δ in
-// the heading frame of the root joint. Both hide what transfers across rigs:
-//  - turning: a 60° turn over a 64-frame window changes 2 of J × 9 numbers; the
-//    networks learnt to ignore it (a tokenizer trained on Θ gave back the same
-//    root heading for an input turned by 60°);
-//  - direction: the root joint of some rigs faces away from the body (the MANN
-//    dog's by 90°), so Δ's "forward" is another rig's "sideways";
-//  - where the root faces at all: the networks gave back a root heading near 0
-//    at frame 0 on every rig (the dog's is 76–126°: it came back 86° off on
-//    average, undone in the joints below the root);
-//  - height: Θ's Δy holds the root height at frame 0 and steps after it; the
-//    decoder smeared that spike over frames 0 and 1, and every decoded clip
-//    started with its body sunk into the floor (a Bandai walk's hips at 67 cm
-//    in frame 0, 94 cm from frame 1 on).
+// Why: Θ's absolute root orientation and root-frame Δ hide turning, forward and height (docs/tokenizer.md).
 // Model space, per root frame t (h_t = heading of the root, nec::heading_rotation):
 //   [kRootMotionScale · Δx', y_t, kRootMotionScale · Δz', rot6D(R̃_t), kYawRateScale · ω_t]
 // with y_t the root's height (Θ's Δy summed over frames 0..t), Δ' = Y(h_0) Δ (the body's heading frame: every window starts with its
@@ -37,11 +24,7 @@
 namespace nec::tat {
 
 constexpr int64_t kModelChannels = 10;
-// The root's motion per frame (Δx, Δz ~0.04 body sizes, ω ~0.02 rad while
-// walking) is far smaller than every other feature: the networks read and
-// predict it times these, and the loss compares it at that scale. The yaw
-// rate gets more: its errors add up over a clip (a straight 6.5-s walk came
-// back turned by 44° at 20, by 19° at 60; see README, Measured).
+// The root's motion is tiny beside the other features, and the yaw rate's errors add up (docs/tokenizer.md).
 constexpr double kRootMotionScale = 20.0;  // Δx, Δz
 constexpr double kYawRateScale = 60.0;     // ω
 

@@ -7,8 +7,10 @@
 //   // q.quantized (N, C) with straight-through gradients, q.codes (N, R), q.commitment_loss
 //   at::Tensor same = rvq->codes_to_latent(q.codes);  // == q.quantized.detach() (all layers used)
 //
-// Codebooks are EMA-updated (no gradient) in training mode, from the rows the
-// mask keeps. They are seeded from the first training batch, and a code whose EMA
+// Codebooks are EMA-updated (no gradient) from the rows the mask keeps in
+// training mode: forward collects the statistics, update_codebooks() moves the
+// EMA once per optimizer step (a batch run in parts, or on several ranks,
+// updates as one). They are seeded in the first training forward, and a code whose EMA
 // usage falls below dead_code_threshold is restarted, both k-means++ style: at kept
 // residuals drawn with a chance proportional to how badly the codes explain them.
 // Quantize dropout (training only): with
@@ -22,6 +24,11 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
+
+namespace nec::train {
+class Communicator;
+}
 
 namespace nec::tat {
 
@@ -51,6 +58,14 @@ class ResidualQuantizerImpl : public torch::nn::Module {
 
   // latent (N, C); mask (N) bool, true for rows that count (real frames), or undefined = all.
   QuantizerOutput forward(const at::Tensor& latent, const at::Tensor& mask = {});
+  // Moves the EMA codebooks by the statistics the training forwards since the
+  // last call collected (summed over the ranks of the communicator), restarts
+  // dead codes, and clears the statistics. Returns whether a layer moved.
+  // On several ranks every rank calls it once per step.
+  bool update_codebooks();
+  // The ranks of a data-parallel run (null: one process): seeding and updates
+  // then use every rank's rows, and every rank keeps the same codebooks.
+  void set_communicator(const train::Communicator* communicator) { communicator_ = communicator; }
   // codes (N, R') int64 with R' <= R (the first R' layers) -> (N, C), no gradient needed.
   at::Tensor codes_to_latent(const at::Tensor& codes);
 
@@ -62,6 +77,14 @@ class ResidualQuantizerImpl : public torch::nn::Module {
   at::Tensor ema_counts_;   // buffer (R, K)
   at::Tensor ema_sums_;     // buffer (R, K, C)
   at::Tensor initialized_;  // buffer () bool: codebooks seeded from the first batch
+  // Statistics of the training forwards since the last update_codebooks().
+  at::Tensor pending_counts_;                         // (R, K) kept rows per code
+  at::Tensor pending_sums_;                           // (R, K, C) their sum
+  std::vector<std::vector<at::Tensor>> pending_rows_;  // per layer: (N, 2C + 1) residual, its error, weight
+  const train::Communicator* communicator_ = nullptr;
+
+  // `rows` of every rank, concatenated in rank order (this rank's alone without a communicator).
+  at::Tensor all_ranks(const at::Tensor& rows) const;
 };
 TORCH_MODULE(ResidualQuantizer);
 

@@ -104,6 +104,10 @@ class TokenizerImpl : public torch::nn::Module {
   TokenizerOutput forward(const at::Tensor& features, const at::Tensor& joint_mask, const at::Tensor& frame_mask,
                           const at::Tensor& joint_embeddings);
 
+  // The quantizer's once-per-step EMA update and its ranks (quantizer.h).
+  bool update_codebooks() { return quantizer_->update_codebooks(); }
+  void set_communicator(const train::Communicator* communicator) { quantizer_->set_communicator(communicator); }
+
   const TatConfig& config() const { return config_; }
 
  private:

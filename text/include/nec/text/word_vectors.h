@@ -72,6 +72,10 @@ class WordVectors {
   // unknown version, truncation or inconsistent offsets throw nec::InputError
   // naming the file and ending with kWordVectorHint.
   static WordVectors load(const std::string& path);
+  // load(path, or default_word_vectors_path() when empty), checked to hold
+  // `dim`-d vectors (the width of the names a model reads): InputError naming
+  // the file and both widths otherwise.
+  static WordVectors load_checked(const std::string& path, int64_t dim);
 
   WordVectors(WordVectors&& other) noexcept = default;
   WordVectors& operator=(WordVectors&& other) noexcept = default;

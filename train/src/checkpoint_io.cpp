@@ -1,5 +1,5 @@
 // Checkpoint directory building blocks: config.json reading, tensor archives, atomic swap.
-#include "nec/owo/checkpoint_io.h"
+#include "nec/train/checkpoint_io.h"
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-namespace nec::owo {
+namespace nec::train {
 namespace {
 
 namespace fs = std::filesystem;
@@ -173,6 +173,10 @@ void write_checkpoint_directory(const std::string& dir, const std::string& what,
   try {
     if (!fs::create_directory(temp, ec)) throw std::runtime_error(temp.string() + ": cannot create: " + ec.message());
     fill(temp.string());
+    for (const fs::directory_entry& entry : fs::recursive_directory_iterator(temp)) {
+      if (entry.is_regular_file() || entry.is_directory()) sync_to_disk(entry.path().string());
+    }
+    sync_to_disk(temp.string());
     fs::path old;
     if (exists) {
       old = sibling(target, "old");
@@ -185,6 +189,7 @@ void write_checkpoint_directory(const std::string& dir, const std::string& what,
       if (!old.empty()) fs::rename(old, target, ignored);
       throw std::runtime_error(dir + ": cannot move the written checkpoint into place: " + ec.message());
     }
+    sync_to_disk(target.parent_path().empty() ? "." : target.parent_path().string());
     if (!old.empty()) remove_tree(old.string());
   } catch (...) {
     remove_tree(temp.string());
@@ -192,4 +197,25 @@ void write_checkpoint_directory(const std::string& dir, const std::string& what,
   }
 }
 
-}  // namespace nec::owo
+void check_output_directory(const std::string& dir, bool resume, bool force) {
+  std::error_code ec;
+  const bool exists = fs::exists(dir, ec);
+  const bool checkpoint = fs::exists(fs::path(dir) / kConfigFile, ec);
+  if (resume) {
+    if (!checkpoint) {
+      throw InputError(dir, 0, "no checkpoint to resume; give the --out of an earlier run, or leave out --resume");
+    }
+    return;
+  }
+  if (checkpoint) {
+    if (force) return;
+    throw InputError(dir, 0,
+                     "already holds a checkpoint; pass --resume to continue it, --force to replace it, or choose "
+                     "another --out");
+  }
+  if (exists && (!fs::is_directory(dir, ec) || !fs::is_empty(dir, ec))) {
+    throw InputError(dir, 0, "exists and is not a checkpoint directory; choose another --out");
+  }
+}
+
+}  // namespace nec::train

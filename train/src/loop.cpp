@@ -1,12 +1,12 @@
 // The training step loop: schedule, progress line, finite check, checkpoint cadence, resume.
-#include "training_loop.h"
+#include "nec/train/loop.h"
 
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <stdexcept>
 
-namespace nec::app {
+namespace nec::train {
 namespace {
 
 constexpr double kRedrawSeconds = 0.2;  // least time between two redraws of the terminal line
@@ -120,6 +120,7 @@ std::string ProgressReporter::status(int64_t step, const LossTerms& terms) const
 }
 
 void ProgressReporter::step(int64_t step, const LossTerms& terms, bool log_step) {
+  if (out_ == nullptr) return;
   if (!terminal_) {
     if (log_step) {
       std::fprintf(out_, "%s\n", status(step, terms).c_str());
@@ -136,6 +137,7 @@ void ProgressReporter::step(int64_t step, const LossTerms& terms, bool log_step)
 }
 
 void ProgressReporter::line(const std::string& text) {
+  if (out_ == nullptr) return;
   if (line_showing_) std::fputs("\r\x1b[K", out_);
   std::fprintf(out_, "%s\n", text.c_str());
   std::fflush(out_);
@@ -144,6 +146,7 @@ void ProgressReporter::line(const std::string& text) {
 }
 
 void ProgressReporter::finish() {
+  if (out_ == nullptr) return;
   if (line_showing_) std::fputc('\n', out_);
   std::fflush(out_);
   line_showing_ = false;
@@ -213,4 +216,4 @@ InterruptSignals::~InterruptSignals() {
 
 bool InterruptSignals::received() const { return g_interrupt_received != 0; }
 
-}  // namespace nec::app
+}  // namespace nec::train

@@ -1,6 +1,6 @@
 // The training step loop (apps/training_loop.h): NaN stop, checkpoint and
 // validation cadence, resume start step, progress lines and ETA formatting.
-#include "training_loop.h"
+#include "nec/train/loop.h"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace nec::app {
+namespace nec::train {
 namespace {
 
 // Captures what a ProgressReporter prints.
@@ -283,4 +283,4 @@ TEST(TrainingLoop, RejectsBadSchedulesAndMissingStep) {
 }
 
 }  // namespace
-}  // namespace nec::app
+}  // namespace nec::train

@@ -1,7 +1,8 @@
 // Building blocks of checkpoint directories (DESIGN.md, Files the tool writes),
 // shared by every model's checkpoint format: checked reading of config.json,
-// named-tensor archives checked against a module, and the atomic swap of a
-// whole directory.
+// named-tensor archives checked against a module, the atomic swap of a whole
+// directory (every file flushed to disk first), and the check of a training
+// run's output directory.
 //
 //   write_checkpoint_directory("runs/tat", "a TAT checkpoint", [&](const std::string& temp) {
 //     write_file_atomic(temp + "/config.json", config.dump(2));
@@ -23,7 +24,7 @@ namespace torch::nn {
 class Module;
 }
 
-namespace nec::owo {
+namespace nec::train {
 
 // Reads fields of a JSON file (a checkpoint's config.json, a training
 // config); every problem is an InputError(file, 0, "field 'a.b' ...; <hint>").
@@ -81,7 +82,7 @@ void save_module_tensors(torch::nn::Module& module, const std::string& path);
 void load_module_tensors(torch::nn::Module& module, const std::string& path, const std::string& hint);
 
 // Creates a temporary sibling directory of `dir`, lets `fill` write into it,
-// then swaps it into place (an existing checkpoint is moved aside first and
+// flushes every file in it to disk, then swaps it into place (an existing checkpoint is moved aside first and
 // removed only after the swap), so `dir` is always the old or the new
 // checkpoint, never a mixture. `what` names the kind in messages, e.g. "an OwO
 // checkpoint". Refuses (std::runtime_error) to replace a non-empty directory
@@ -89,4 +90,11 @@ void load_module_tensors(torch::nn::Module& module, const std::string& path, con
 void write_checkpoint_directory(const std::string& dir, const std::string& what,
                                 const std::function<void(const std::string& temp_dir)>& fill);
 
-}  // namespace nec::owo
+// The --out of a training run before anything is written: with `resume` it
+// must hold a checkpoint (a config.json); without, it must not hold one unless
+// `force` (the run then replaces it at its first checkpoint), and otherwise be
+// absent or an empty directory. Throws InputError(dir, 0, ...) saying which
+// flag to pass; touches nothing.
+void check_output_directory(const std::string& dir, bool resume, bool force);
+
+}  // namespace nec::train

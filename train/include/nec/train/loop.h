@@ -35,7 +35,7 @@
 #include <utility>
 #include <vector>
 
-namespace nec::app {
+namespace nec::train {
 
 // When things happen, counted in optimizer steps.
 struct TrainingSchedule {
@@ -70,6 +70,7 @@ std::string format_duration(double seconds);
 // (validation, checkpoints) go above the redrawn line.
 class ProgressReporter {
  public:
+  // `out` null: prints nothing (the other ranks of a data-parallel run).
   // `clock` returns seconds from any fixed origin; empty: std::chrono::steady_clock.
   ProgressReporter(std::FILE* out, bool terminal, std::function<double()> clock = {});
 
@@ -142,4 +143,4 @@ class InterruptSignals {
 TrainingOutcome run_training(const TrainingSchedule& schedule, int64_t start_step, const std::string& checkpoint_dir,
                              const TrainingHooks& hooks, ProgressReporter& progress);
 
-}  // namespace nec::app
+}  // namespace nec::train
