@@ -138,7 +138,7 @@ int run_demo(int argc, char** argv) {
   // 4. Normalized and augmented BVH, strips and pages.
   std::vector<viewer::ViewClip> normalized_views;
   std::vector<viewer::ViewClip> augmented_views;
-  std::mt19937 rng(static_cast<unsigned>(seed));
+  SplitMix64 rng(static_cast<uint64_t>(seed));
   for (const auto& [name, index] : first_clip_of) {
     const CacheClip& c = cache.clips[index];
     const Clip clip = cache.clip(index);

@@ -16,7 +16,6 @@
 #include <chrono>
 #include <filesystem>
 #include <optional>
-#include <set>
 #include <thread>
 
 namespace nec::app {
@@ -148,32 +147,9 @@ int run_eval_owo(int argc, char** argv) {
   }
 
   owo::SkeletonSet set = owo::load_skeleton_set(caches, hold_out, 0, 0);
-  // What it trained on decides, when known: held-out patterns may have changed,
-  // and another cache may hold skeletons the run never saw.
-  std::vector<owo::PretrainSkeleton> unseen = std::move(set.held_out), seen;
-  if (record) {
-    const std::set<std::string> trained(record->train_skeletons.begin(), record->train_skeletons.end());
-    std::vector<owo::PretrainSkeleton> kept;
-    for (owo::PretrainSkeleton& s : unseen) {
-      if (trained.count(s.hash)) {
-        s.group = "train";
-        seen.push_back(std::move(s));
-      } else {
-        kept.push_back(std::move(s));
-      }
-    }
-    unseen = std::move(kept);
-    for (owo::PretrainSkeleton& s : set.train) {
-      if (trained.count(s.hash)) {
-        seen.push_back(std::move(s));
-      } else {
-        s.group = "not in its training set";
-        unseen.push_back(std::move(s));
-      }
-    }
-  } else {
-    seen = std::move(set.train);
-  }
+  if (record) set = owo::split_as_trained(std::move(set), record->train_skeletons);
+  std::vector<owo::PretrainSkeleton>& unseen = set.held_out;
+  std::vector<owo::PretrainSkeleton>& seen = set.train;
   if (unseen.empty()) {
     throw InputError(cli.value("--data"), 0,
                      "holds no skeleton that " + model_dir + " did not train on; give caches with held-out skeletons");

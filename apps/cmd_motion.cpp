@@ -10,7 +10,6 @@
 #include <fmt/format.h>
 
 #include <map>
-#include <random>
 
 namespace nec::app {
 namespace {
@@ -131,7 +130,7 @@ int run_augment(int argc, char** argv) {
   cli.example("nec augment walk.bvh --kind length --seed 3 -o walk_long_legs.bvh");
   if (!cli.parse(argc, argv)) return 0;
   const std::string kind_name = cli.value("--kind");
-  std::mt19937 rng(static_cast<unsigned>(cli.integer("--seed")));
+  SplitMix64 rng(static_cast<uint64_t>(cli.integer("--seed")));
   AugmentKind kind;
   if (kind_name == "rest") {
     kind = AugmentKind::RestPose;
@@ -142,7 +141,7 @@ int run_augment(int argc, char** argv) {
   } else if (kind_name == "subdivide") {
     kind = AugmentKind::Subdivision;
   } else if (kind_name == "joints") {
-    kind = std::bernoulli_distribution(0.5)(rng) ? AugmentKind::JointRemoval : AugmentKind::Subdivision;
+    kind = rng.chance(0.5) ? AugmentKind::JointRemoval : AugmentKind::Subdivision;
   } else {
     throw UsageError("--kind must be rest, length, joints, remove or subdivide, got '" + kind_name + "'");
   }

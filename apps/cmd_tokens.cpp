@@ -3,11 +3,8 @@
 #include "commands.h"
 #include "model_options.h"
 
-#include "nec/motion/bvh.h"
 #include "nec/motion/error.h"
-#include "nec/motion/follow_heading.h"
-#include "nec/motion/foot_lock.h"
-#include "nec/tat/tokens.h"
+#include "nec/tat/session.h"
 
 #include <fmt/format.h>
 #include <torch/torch.h>
@@ -18,74 +15,12 @@
 namespace nec::app {
 namespace {
 
-// Tokens of one BVH file (`path`), prepared for the model.
-tat::TokenFile encode_file(TokenizerSession& session, const PreparedClip& source, const std::string& path) {
-  const Features features = encode_features(source.clip.skeleton, source.clip.motion);
-  const at::Tensor codes = tat::encode_clip(*session.model.tokenizer, features,
-                                            session.embed(source.clip.skeleton, source.canonical_names),
-                                            session.windows)
-                               .to(torch::kInt32)
-                               .contiguous();
-  const tat::TatConfig& config = session.model.tokenizer->config();
-  tat::TokenFile tokens;
-  tokens.fps = session.model.info.fps;
-  tokens.frames = features.frame_count;
-  tokens.downsampling = static_cast<int>(config.downsampling());
-  tokens.layers = static_cast<int>(config.quantizer.layers);
-  tokens.codebook_size = static_cast<int>(config.quantizer.codebook_size);
-  tokens.model_kind = tat::to_string(config.kind);
-  tokens.training_step = session.model.info.training_step;
-  tokens.source_file = path;
-  tokens.source_joints = source.clip.skeleton.joint_count();
-  tokens.source_scale = source.normalization.scale;
-  tokens.heading_degrees = heading_degrees(source.normalization);
-  tokens.codes.assign(codes.data_ptr<int32_t>(), codes.data_ptr<int32_t>() + codes.numel());
-  return tokens;
-}
-
-// What decode_onto did after decoding.
-struct DecodeReport {
-  std::optional<HeadingReport> heading;  // steered to follow a source's facing and path
-  FootLockReport feet;
-};
-
-// Decodes tokens onto the skeleton of `target_path`, steers it to face and go where `heading_source` does
-// (when given: the clip the tokens came from, prepared for the model), pins the feet it puts down unless
-// `free_feet`, and writes OUT.bvh in that file's units, up axis, joint names, channels and Euler orders.
-DecodeReport decode_onto(TokenizerSession& session, const tat::TokenFile& tokens, const std::string& target_path,
-                         UpAxis up, const Clip* heading_source, bool free_feet, const std::string& out_path) {
-  const tat::TatConfig& config = session.model.tokenizer->config();
-  if (tokens.layers > config.quantizer.layers || tokens.codebook_size != config.quantizer.codebook_size ||
-      tokens.downsampling != config.downsampling()) {
-    throw InputError(tokens.source_file, 0,
-                     fmt::format("tokens of a {}-layer x {} codebook at downsampling {} do not fit this model "
-                                 "({} x {}, downsampling {}); decode with the model that encoded them",
-                                 tokens.layers, tokens.codebook_size, tokens.downsampling, config.quantizer.layers,
-                                 config.quantizer.codebook_size, config.downsampling()));
-  }
-  const PreparedClip target = prepare_for_model(target_path, session.model.info.fps, up);
-  const Skeleton& skeleton = target.clip.skeleton;
-  const at::Tensor codes =
-      torch::from_blob(const_cast<int32_t*>(tokens.codes.data()), {tokens.steps(), tokens.layers}, torch::kInt32)
-          .to(torch::kInt64);
-  const Features features =
-      tat::decode_clip(*session.model.tokenizer, codes, tokens.frames, session.embed(skeleton, target.canonical_names),
-                       skeleton, tokens.fps, session.windows);
-  Clip out{skeleton, decode_features(skeleton, features), {}};
-  DecodeReport report;
-  if (heading_source != nullptr) report.heading = follow_heading(*heading_source, out.skeleton, out.motion);
-  if (!free_feet) report.feet = lock_feet(out.skeleton, out.motion);
-  out = denormalize(out, with_heading(target.normalization, tokens.heading_degrees));
-  write_bvh(out_path, out.skeleton, out.motion);
-  return report;
-}
-
 void declare_feet_option(CommandLine& cli) {
   cli.flag("--free-feet", "leave the feet as decoded (default: pin the feet the motion puts down and bend their legs\n"
                           "to reach the pins, as decoded feet slide)");
 }
 
-std::string decode_summary(const DecodeReport& report) {
+std::string decode_summary(const tat::DecodeReport& report) {
   std::string out;
   if (report.heading) {
     out += fmt::format("; steered to face and go as the source does (body turned {:.1f}° on average, {:.1f}° at "
@@ -117,10 +52,10 @@ int run_encode(int argc, char** argv) {
   cli.example("nec encode walk.bvh --model runs/tat -o walk.tokens.json");
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
-  TokenizerSession session = open_tokenizer(tokenizer_options(cli));
+  tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const std::string& path = cli.positional_value("IN.bvh");
   const tat::TokenFile tokens =
-      encode_file(session, prepare_for_model(path, session.model.info.fps, cli.up_axis("--up")), path);
+      tat::encode_file(session, tat::prepare_for_model(path, session.model.info.fps, cli.up_axis("--up")), path);
   tat::write_tokens(cli.value("-o"), tokens);
   fmt::print("wrote {}: {} frames -> {} token steps x {} layers ({:.2f} s)\n", cli.value("-o"), tokens.frames,
              tokens.steps(), tokens.layers, seconds_since(start));
@@ -141,9 +76,9 @@ int run_decode(int argc, char** argv) {
   cli.example("nec decode walk.tokens.json --skeleton dragon.bvh --model runs/tat -o dragon_walk.bvh");
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
-  TokenizerSession session = open_tokenizer(tokenizer_options(cli));
+  tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const tat::TokenFile tokens = tat::read_tokens(cli.positional_value("TOKENS.json"));
-  const DecodeReport report = decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"), nullptr,
+  const tat::DecodeReport report = tat::decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"), nullptr,
                                           cli.is_set("--free-feet"), cli.value("-o"));
   fmt::print("wrote {}: {} frames on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
              cli.value("--skeleton"), decode_summary(report), seconds_since(start));
@@ -167,13 +102,13 @@ int run_transfer(int argc, char** argv) {
   cli.example("nec transfer human_wave.bvh --to dragon.bvh --model runs/tat -o dragon_wave.bvh");
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
-  TokenizerSession session = open_tokenizer(tokenizer_options(cli));
+  tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const std::string& path = cli.positional_value("SRC.bvh");
-  const PreparedClip source = prepare_for_model(path, session.model.info.fps, cli.up_axis("--up"));
-  const tat::TokenFile tokens = encode_file(session, source, path);
-  const DecodeReport report =
-      decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"),
-                  cli.is_set("--free-heading") ? nullptr : &source.clip, cli.is_set("--free-feet"), cli.value("-o"));
+  const PreparedClip source = tat::prepare_for_model(path, session.model.info.fps, cli.up_axis("--up"));
+  const tat::TokenFile tokens = tat::encode_file(session, source, path);
+  const tat::DecodeReport report =
+      tat::decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"),
+                       cli.is_set("--free-heading") ? nullptr : &source.clip, cli.is_set("--free-feet"), cli.value("-o"));
   if (!cli.value("--tokens").empty()) tat::write_tokens(cli.value("--tokens"), tokens);
   fmt::print("wrote {}: {} frames of {} on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames, path,
              cli.value("--to"), decode_summary(report), seconds_since(start));

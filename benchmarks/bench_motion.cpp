@@ -1,5 +1,5 @@
 // Throughput of the motion core on real files: BVH parsing (MB/s of text) and
-// forward kinematics (joint-frames/s, one thread).
+// forward kinematics (joint-frames/s, one thread), and reading a 1,000-clip dataset cache.
 //
 //   bench_motion [benchmark flags] [FILE.bvh ...]
 //
@@ -9,14 +9,17 @@
 // stddev and cv; scripts/bench.sh reads the medians. 1 MB = 10^6 bytes in bench.sh's table (Google Benchmark's
 // own console line uses 1024-based units).
 #include "nec/motion/bvh.h"
+#include "nec/motion/dataset.h"
 #include "nec/motion/files.h"
 #include "nec/motion/kinematics.h"
+#include "nec/motion/preprocess.h"
 
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -99,10 +102,55 @@ void BM_JointPositions(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * c.joint_frames));
 }
 
+// A dataset cache of 1,000 clips (the corpus's clips, preprocessed, 90 frames each, repeated), written once.
+const std::string& thousand_clip_cache() {
+  static const std::string dir = [] {
+    const Corpus& c = corpus();
+    std::vector<nec::PreparedClip> prepared;
+    for (const nec::Clip& clip : c.clips) {
+      nec::PreparedClip p = nec::preprocess(clip, "bench");
+      if (!p.report.accepted()) continue;
+      if (p.clip.motion.frame_count > 90) p.clip.motion = p.clip.motion.slice(0, 90);
+      prepared.push_back(std::move(p));
+    }
+    if (prepared.empty()) throw std::runtime_error("no corpus clip survives preprocessing");
+    std::vector<nec::CacheEntry> entries;
+    for (int i = 0; i < 1000; ++i) {
+      nec::CacheEntry e;
+      e.prepared = prepared[static_cast<size_t>(i) % prepared.size()];
+      e.source = "corpus/take_" + std::to_string(i / 3) + ".bvh";
+      e.dataset = "bench";
+      e.captions = {"caption one of clip " + std::to_string(i), "caption two"};
+      entries.push_back(std::move(e));
+    }
+    const std::string out = (std::filesystem::temp_directory_path() / "nec_bench_thousand_clips").string();
+    nec::write_cache(out, entries, nec::CacheOptions{});
+    return out;
+  }();
+  return dir;
+}
+
+// read_cache of 1,000 clips plus one pass over every feature (the memory map's
+// pages are faulted in at read time, not hidden in the first use).
+void BM_ReadCache(benchmark::State& state) {
+  const std::string& dir = thousand_clip_cache();
+  size_t floats = 0;
+  for (auto _ : state) {
+    const nec::DatasetCache cache = nec::read_cache(dir);
+    float sum = 0.0f;
+    for (size_t i = 0; i < cache.feature_data.size(); i += 16) sum += cache.feature_data[i];
+    benchmark::DoNotOptimize(sum);
+    floats = cache.feature_data.size();
+  }
+  state.counters["clips"] = 1000;
+  state.counters["feature_MB"] = static_cast<double>(floats * sizeof(float)) / (1 << 20);
+}
+
 void register_all() {
   for (auto* b : {benchmark::RegisterBenchmark("BM_ParseBvh", BM_ParseBvh),
                   benchmark::RegisterBenchmark("BM_ForwardKinematics", BM_ForwardKinematics),
-                  benchmark::RegisterBenchmark("BM_JointPositions", BM_JointPositions)}) {
+                  benchmark::RegisterBenchmark("BM_JointPositions", BM_JointPositions),
+                  benchmark::RegisterBenchmark("BM_ReadCache", BM_ReadCache)}) {
     b->Unit(benchmark::kMillisecond)
         ->UseRealTime()  // wall clock, as the three.js peer measures
         ->MinWarmUpTime(0.5)

@@ -37,7 +37,7 @@ double shared_joint_difference(const Clip& a, const Clip& b) {
 
 TEST(Augment, RestPoseResetKeepsPositions) {
   const Clip clip = cmu_clip();
-  std::mt19937 rng(1);
+  SplitMix64 rng(1);
   for (int trial = 0; trial < 3; ++trial) {
     const Clip reset = reset_rest_pose(clip, rng);
     const double diff = shared_joint_difference(clip, reset);
@@ -57,10 +57,11 @@ TEST(Augment, RestPoseResetKeepsPositions) {
 }
 
 TEST(Augment, RestPoseResetOnRandomTrees) {
-  std::mt19937 rng(2);
+  std::mt19937 rigs(2);  // test trees (test_support)
+  SplitMix64 rng(2);      // augmentation draws
   for (int trial = 0; trial < 5; ++trial) {
-    Clip clip{testing::random_skeleton(rng, 10 + trial * 5), {}, {}};
-    clip.motion = testing::random_motion(rng, clip.skeleton, 8);
+    Clip clip{testing::random_skeleton(rigs, 10 + trial * 5), {}, {}};
+    clip.motion = testing::random_motion(rigs, clip.skeleton, 8);
     EXPECT_LT(shared_joint_difference(clip, reset_rest_pose(clip, rng)), 1e-9);
   }
 }
@@ -68,7 +69,7 @@ TEST(Augment, RestPoseResetOnRandomTrees) {
 TEST(Augment, BoneLengthsScaleSymmetricallyByPart) {
   const Clip clip = cmu_clip();
   const auto names = canonical(clip.skeleton);
-  std::mt19937 rng(3);
+  SplitMix64 rng(3);
   const Clip scaled = scale_bone_lengths(clip, names, rng);
   const auto parts = body_parts(clip.skeleton, names);
   const int left_leg = clip.skeleton.find("LeftLeg");
@@ -98,7 +99,7 @@ TEST(Augment, JointRemovalKeepsTheOtherJoints) {
     EXPECT_LT(shared_joint_difference(clip, smaller), 1e-9 * clip.skeleton.diameter()) << clip.skeleton.names[j];
     EXPECT_NO_THROW(smaller.skeleton.validate());
   }
-  std::mt19937 rng(4);
+  SplitMix64 rng(4);
   const Clip fewer = remove_joints(clip, rng, 0.2);
   EXPECT_LT(fewer.skeleton.joint_count(), clip.skeleton.joint_count());
   EXPECT_LT(shared_joint_difference(clip, fewer), 1e-9 * clip.skeleton.diameter());
@@ -144,7 +145,7 @@ TEST(Augment, SubdivisionKeepsPositionsExactly) {
   const int arm = clip.skeleton.parents[forearm];
   const Vec3 expected = a.position(7, arm) + 0.4 * (a.position(7, forearm) - a.position(7, arm));
   EXPECT_LT((b.position(7, inserted) - expected).norm(), 1e-9 * clip.skeleton.diameter());
-  std::mt19937 rng(6);
+  SplitMix64 rng(6);
   const Clip many = subdivide_bones(clip, rng, 0.2);
   EXPECT_GT(many.skeleton.joint_count(), clip.skeleton.joint_count());
   EXPECT_LT(shared_joint_difference(clip, many), 1e-9 * clip.skeleton.diameter());
@@ -155,7 +156,7 @@ TEST(Augment, SameSeedSameRig) {
   const auto names = canonical(clip.skeleton);
   for (AugmentKind kind : {AugmentKind::RestPose, AugmentKind::BoneLength, AugmentKind::JointRemoval,
                            AugmentKind::Subdivision}) {
-    std::mt19937 a(9), b(9);
+    SplitMix64 a(9), b(9);
     const Clip x = augment(clip, kind, names, a);
     const Clip y = augment(clip, kind, names, b);
     EXPECT_EQ(x.skeleton.names, y.skeleton.names);

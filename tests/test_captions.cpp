@@ -13,10 +13,10 @@
 namespace nec {
 namespace {
 
+using testing::contains;
 using testing::TempDir;
 
 namespace fs = std::filesystem;
-
 
 // The message of the InputError `f` throws, or "" when it throws none.
 template <typename F>
@@ -28,8 +28,6 @@ std::string input_error(F f) {
   }
   return "";
 }
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 const char* kSet1Contents =
     "dataset-1_walk\ndataset-1_run\ndataset-1_dash\ndataset-1_walk-back\ndataset-1_walk-left\n"

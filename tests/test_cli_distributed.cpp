@@ -18,9 +18,8 @@ namespace nec {
 namespace {
 
 using testing::CommandResult;
+using testing::contains;
 using testing::run_nec;
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 constexpr const char* kOwoConfig = R"({
   "encoder": {"name_dim": 0, "dim": 16, "layers": 1, "heads": 2, "edge_dim": 8},
@@ -37,11 +36,11 @@ constexpr const char* kTatConfig = R"({"model": {"kind": "nec-rvq", "dim": 16, "
   "steps": 5, "batch_size": 4, "window_frames": 16, "augment_probability": 0.0, "joint_buckets": 0,
   "log_every": 1, "validate_every": 0, "checkpoint_every": 0, "seed": 1})";
 
-class CliDistributed : public ::testing::Test {
+class CliDistributed : public testing::SharedFolderTest {
  protected:
   static void SetUpTestSuite() {
-    shared_ = std::make_unique<testing::TempDir>();
-    const testing::TempDir& d = *shared_;
+    SharedFolderTest::SetUpTestSuite();
+    const testing::TempDir& d = shared_folder();
     const CommandResult zoo = run_nec("zoo --out " + d / "zoo" + " --creatures 1 --plans quadruped "
                                       "--clips-per-creature 12 --seconds 2 --seed 4 --quiet");
     ASSERT_EQ(zoo.exit_code, 0) << zoo.output;
@@ -53,20 +52,11 @@ class CliDistributed : public ::testing::Test {
     ASSERT_EQ(owo.exit_code, 0) << owo.output;
     d.write("tat.json", kTatConfig);
   }
-  static void TearDownTestSuite() { shared_.reset(); }
-
-  static std::string shared(const std::string& relative) { return *shared_ / relative; }
-  std::string path(const std::string& relative) const { return dir_ / relative; }
   static std::string train_tat(const std::string& out, const std::string& extra) {
     return "train tat --config " + shared("tat.json") + " --data " + shared("cache") + " --owo " + shared("owo") +
            " --out " + out + " --threads 1 " + extra;
   }
-
-  testing::TempDir dir_;
-  static std::unique_ptr<testing::TempDir> shared_;
 };
-
-std::unique_ptr<testing::TempDir> CliDistributed::shared_;
 
 // How far apart the parameters and buffers of two tokenizer checkpoints are.
 struct Difference {

@@ -20,9 +20,8 @@ namespace {
 namespace fs = std::filesystem;
 using testing::CommandResult;
 using testing::last_line_starting;
+using testing::contains;
 using testing::run_nec;
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 constexpr const char* kOwoConfig = R"({
   "encoder": {"name_dim": 0, "dim": 16, "layers": 1, "heads": 2, "edge_dim": 8},
@@ -41,12 +40,12 @@ std::string tat_config(double learning_rate = 3e-3) {
   "checkpoint_every": 3, "seed": 1})";
 }
 
-class CliTat : public ::testing::Test {
+class CliTat : public testing::SharedFolderTest {
  protected:
   // One zoo, cache, OwO encoder and trained tokenizer for every test.
   static void SetUpTestSuite() {
-    shared_ = std::make_unique<testing::TempDir>();
-    const testing::TempDir& d = *shared_;
+    SharedFolderTest::SetUpTestSuite();
+    const testing::TempDir& d = shared_folder();
     const CommandResult zoo = run_nec("zoo --out " + d / "zoo" + " --creatures 9 --clips-per-creature 2 --seconds 2 "
                                       "--seed 5 --hold-out spider --quiet");
     ASSERT_EQ(zoo.exit_code, 0) << zoo.output;
@@ -60,9 +59,6 @@ class CliTat : public ::testing::Test {
                                       d / "cache" + " --owo " + d / "owo" + " --out " + d / "tat" + " --threads 1");
     ASSERT_EQ(tat.exit_code, 0) << tat.output;
   }
-  static void TearDownTestSuite() { shared_.reset(); }
-
-  static std::string shared(const std::string& name) { return *shared_ / name; }
   // A zoo clip of creature `index` (c000 ...), e.g. clip("c001") for the quadruped.
   static std::string zoo_clip(const std::string& creature_prefix) {
     for (const std::string& file : testing::bvh_files_under(shared("zoo"))) {
@@ -70,13 +66,7 @@ class CliTat : public ::testing::Test {
     }
     return "";
   }
-  std::string path(const std::string& name) const { return dir_ / name; }
-
-  static std::unique_ptr<testing::TempDir> shared_;
-  testing::TempDir dir_;
 };
-
-std::unique_ptr<testing::TempDir> CliTat::shared_;
 
 TEST_F(CliTat, TrainingWritesACheckpointAndResumes) {
   const nlohmann::json config = nlohmann::json::parse(read_file(shared("tat/config.json")));
@@ -218,8 +208,10 @@ TEST_F(CliTat, EncodeDecodeOntoAnotherSkeletonKeepsItsNamesAndChannels) {
       std::abs(check_transfer(source_clip_normalized, preprocess(followed_free_feet, "followed").clip).heading_difference);
   const double free_error = std::abs(check_transfer(source_clip_normalized, preprocess(free, "free").clip).heading_difference);
   std::printf("heading change error: followed %.2f, as decoded %.2f deg\n", followed_error, free_error);
-  EXPECT_LT(followed_error, 3.0);
-  EXPECT_LE(followed_error, free_error);
+  // The tiny model's decoded drift depends on its 6 training steps; steering takes out most of it (its
+  // precision on known drifts is tests/test_follow_heading.cpp's).
+  EXPECT_LT(followed_error, 5.0);
+  EXPECT_LT(followed_error, 0.25 * free_error);
 
   // Feet are pinned by turning leg joints only: with --free-feet the root moves and turns the same.
   for (int t = 0; t < followed.motion.frame_count; ++t) {

@@ -21,9 +21,8 @@ namespace fs = std::filesystem;
 
 using testing::CommandResult;
 using testing::last_line_starting;
+using testing::contains;
 using testing::run_nec;
-
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // A tiny model that takes a step in milliseconds; one line per step. The
 // learning rate is constant after warm-up, so a run to step 4 resumed to step 7
@@ -44,12 +43,12 @@ std::string tiny_config(const std::string& optimizer = R"({"learning_rate": 0.00
 })";
 }
 
-class CliTrain : public ::testing::Test {
+class CliTrain : public testing::SharedFolderTest {
  protected:
   // One zoo cache for every test: 9 creatures, one per plan, the spider held out.
   static void SetUpTestSuite() {
-    shared_ = std::make_unique<testing::TempDir>();
-    const testing::TempDir& d = *shared_;
+    SharedFolderTest::SetUpTestSuite();
+    const testing::TempDir& d = shared_folder();
     const CommandResult zoo = run_nec("zoo --out " + d / "zoo" + " --creatures 9 --clips-per-creature 1 --seconds 1 "
                                       "--seed 2 --hold-out spider --quiet");
     ASSERT_EQ(zoo.exit_code, 0) << zoo.output;
@@ -57,20 +56,12 @@ class CliTrain : public ::testing::Test {
                                           " --hold-out-dataset held -o " + d / "cache" + " --quiet");
     ASSERT_EQ(prepare.exit_code, 0) << prepare.output;
   }
-  static void TearDownTestSuite() { shared_.reset(); }
-
-  static std::string cache() { return *shared_ / "cache"; }
-  std::string path(const std::string& name) const { return dir_ / name; }
+  static std::string cache() { return shared("cache"); }
   std::string write(const std::string& name, const std::string& text) const { return dir_.write(name, text); }
   std::string train(const std::string& config, const std::string& out, const std::string& extra = "") const {
     return "train owo --config " + config + " --data " + cache() + " --out " + out + " --threads 1 " + extra;
   }
-
-  static std::unique_ptr<testing::TempDir> shared_;
-  testing::TempDir dir_;
 };
-
-std::unique_ptr<testing::TempDir> CliTrain::shared_;
 
 TEST_F(CliTrain, DispatchByModel) {
   const CommandResult overview = run_nec("train");

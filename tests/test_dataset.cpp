@@ -10,7 +10,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -454,43 +453,6 @@ TEST(DatasetSplits, HeldOutSkeletonsAreAllInTest) {
   options.split.held_out_datasets = {};
   options.split.held_out_skeletons = {"spidr"};
   EXPECT_THROW(build_cache(entries, options), std::invalid_argument);
-}
-
-TEST(DatasetCache, LoadsAThousandClipsQuickly) {
-  std::mt19937 rng(10);
-  std::vector<Skeleton> rigs;
-  for (int k = 0; k < 8; ++k) rigs.push_back(testing::random_skeleton(rng, 20 + 2 * k));
-  std::vector<CacheEntry> entries;
-  for (int i = 0; i < 1000; ++i) {
-    entries.push_back(make_entry(rng, rigs[i % rigs.size()], 90, "corpus/take_" + std::to_string(i / 3) + ".bvh", "synthetic",
-                                 {"caption one of clip " + std::to_string(i), "caption two"}));
-  }
-  const TempDir dir;
-  write_cache(dir / "cache", entries, CacheOptions{});
-  // Time to read, and to read plus one pass over every feature (the memory
-  // map's pages are faulted in at read time, not hidden in the first use).
-  std::vector<double> read_seconds, pass_seconds;
-  size_t floats = 0;
-  for (int repeat = 0; repeat < 5; ++repeat) {
-    const auto start = std::chrono::steady_clock::now();
-    const DatasetCache cache = read_cache(dir / "cache");
-    const auto read = std::chrono::steady_clock::now();
-    float sum = 0.0f;
-    for (size_t i = 0; i < cache.feature_data.size(); i += 16) sum += cache.feature_data[i];
-    const auto pass = std::chrono::steady_clock::now();
-    read_seconds.push_back(std::chrono::duration<double>(read - start).count());
-    pass_seconds.push_back(std::chrono::duration<double>(pass - start).count());
-    ASSERT_EQ(cache.clip_count(), 1000);
-    ASSERT_EQ(cache.skeletons.size(), rigs.size());
-    ASSERT_TRUE(std::isfinite(sum));
-    floats = cache.feature_data.size();
-  }
-  std::sort(read_seconds.begin(), read_seconds.end());
-  std::sort(pass_seconds.begin(), pass_seconds.end());
-  std::printf("read_cache: 1000 clips, %zu MB of features, 5 reads: median %.1f ms (min %.1f, max %.1f); "
-              "read + one pass over the features: median %.1f ms\n",
-              floats * sizeof(float) >> 20, 1e3 * read_seconds[2], 1e3 * read_seconds[0], 1e3 * read_seconds[4],
-              1e3 * pass_seconds[2]);
 }
 
 }  // namespace

@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace nec {
 namespace {
@@ -30,6 +32,41 @@ TEST(Features, LayoutOfRootAndJoints) {
   const double moved = (m.translation(1, 0) - m.translation(0, 0)).norm();
   const Vec3 delta(f.at(1, 0, 0), f.at(1, 0, 1), f.at(1, 0, 2));
   EXPECT_NEAR(delta.norm(), moved, 1e-5);
+}
+
+// Θ of a hand-made clip, every channel written out: a root turned 90° about +Y (facing +X) that steps 1 along
+// world +Z, and a child bent 90° about X. A channel swapped in both encode and decode would pass a round trip;
+// not this.
+TEST(Features, GoldenValuesOfAHandMadeClip) {
+  Skeleton s;
+  s.add_joint("root", -1, Vec3(0, 0, 0), ChannelLayout::position_rotations(EulerOrder::ZXY));
+  s.add_joint("child", 0, Vec3(0, 1, 0), ChannelLayout::rotations(EulerOrder::ZXY));
+  Motion m = Motion::rest(s, 2, 30.0);
+  for (int t = 0; t < 2; ++t) {
+    m.rotation(t, 0) = axis_rotation(1, 90.0);
+    m.rotation(t, 1) = axis_rotation(0, 90.0);
+  }
+  m.translation(0, 0) = Vec3(1.0, 0.9, 2.0);
+  m.translation(1, 0) = Vec3(1.0, 0.9, 3.0);
+  const Features f = encode_features(s, m);
+  // Root: frame 0 holds (0, height, 0); frame 1 the step, in the heading frame: world +Z is the body's -X.
+  // rot6D = the first two columns of R_y(90°) = [[0,0,1],[0,1,0],[-1,0,0]]: (r00, r10, r20, r01, r11, r21).
+  // Child: R_x(90°) = [[1,0,0],[0,0,-1],[0,1,0]] -> (1, 0, 0, 0, 0, 1), no displacement.
+  const float expected[2][2][9] = {
+      {{0.0f, 0.9f, 0.0f, 0.0f, 0.0f, -1.0f, 0.0f, 1.0f, 0.0f}, {0, 0, 0, 1.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.0f}},
+      {{-1.0f, 0.0f, 0.0f, 0.0f, 0.0f, -1.0f, 0.0f, 1.0f, 0.0f}, {0, 0, 0, 1.0f, 0.0f, 0.0f, 0.0f, 0.0f, 1.0f}}};
+  double largest = 0.0;
+  for (int t = 0; t < 2; ++t) {
+    for (int j = 0; j < 2; ++j) {
+      for (int k = 0; k < 9; ++k) {
+        largest = std::max(largest, static_cast<double>(std::abs(f.at(t, j, k) - expected[t][j][k])));
+        EXPECT_NEAR(f.at(t, j, k), expected[t][j][k], 1e-6) << "frame " << t << " joint " << j << " channel " << k;
+      }
+    }
+  }
+  std::printf("largest difference from the hand-computed Θ: %.3g\n", largest);
+  EXPECT_EQ(f.start_xz[0], 1.0);
+  EXPECT_EQ(f.start_xz[1], 2.0);
 }
 
 TEST(Features, InvariantToWorldYaw) {

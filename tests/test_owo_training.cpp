@@ -31,7 +31,6 @@ constexpr int kTorchThreads = 1;
 // writes them ("zoo/c003_spider/walk.bvh"), skeletons named "<plan>-<seed>".
 DatasetCache zoo_cache(const std::vector<zoo::BodyPlan>& plans, int creatures, const std::string& dataset = "zoo",
                        const std::vector<std::string>& held_out_skeletons = {}) {
-  std::mt19937 rng(3);
   std::vector<CacheEntry> entries;
   int index = 0;
   for (int seed = 0; seed < creatures; ++seed) {
@@ -139,7 +138,7 @@ TEST(OwoSkeletonSet, AugmentationYieldsValidSkeletons) {
   owo::AugmentOptions remove_only = always, subdivide_only = always;
   remove_only.rest_pose = remove_only.bone_length = remove_only.subdivision = 0.0;
   subdivide_only.rest_pose = subdivide_only.bone_length = subdivide_only.joint_removal = 0.0;
-  std::mt19937 rng(11);
+  SplitMix64 rng(11);
   int changed_offsets = 0;
   for (const PretrainSkeleton& s : all) {
     const int joints = s.skeleton.joint_count();

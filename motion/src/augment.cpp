@@ -97,9 +97,8 @@ Clip reset_rest_pose_to_frame(const Clip& clip, int frame) {
   return out;
 }
 
-Clip reset_rest_pose(const Clip& clip, std::mt19937& rng) {
-  std::uniform_int_distribution<int> frame(0, std::max(0, clip.motion.frame_count - 1));
-  return reset_rest_pose_to_frame(clip, frame(rng));
+Clip reset_rest_pose(const Clip& clip, SplitMix64& rng) {
+  return reset_rest_pose_to_frame(clip, rng.integer(0, std::max(0, clip.motion.frame_count - 1)));
 }
 
 std::vector<std::string> body_parts(const Skeleton& skeleton, const std::vector<std::string>& canonical_names) {
@@ -133,14 +132,13 @@ std::vector<std::string> body_parts(const Skeleton& skeleton, const std::vector<
   return parts;
 }
 
-Clip scale_bone_lengths(const Clip& clip, const std::vector<std::string>& canonical_names, std::mt19937& rng,
+Clip scale_bone_lengths(const Clip& clip, const std::vector<std::string>& canonical_names, SplitMix64& rng,
                         double min_factor, double max_factor) {
   const std::vector<std::string> parts = body_parts(clip.skeleton, canonical_names);
-  std::uniform_real_distribution<double> uniform(min_factor, max_factor);
   // One factor per part, drawn in a fixed order so a seed gives the same rig.
   std::map<std::string, double> factor;
   for (const std::string& part : parts) factor.emplace(part, 0.0);
-  for (auto& [part, value] : factor) value = uniform(rng);
+  for (auto& [part, value] : factor) value = rng.uniform(min_factor, max_factor);
   Clip out = clip;
   out.warnings.clear();
   for (int j = 1; j < clip.skeleton.joint_count(); ++j) {
@@ -219,14 +217,14 @@ Clip remove_joint(const Clip& clip, int joint) {
                               "' cannot be removed without moving the joints below it");
 }
 
-Clip remove_joints(const Clip& clip, std::mt19937& rng, double fraction) {
+Clip remove_joints(const Clip& clip, SplitMix64& rng, double fraction) {
   Clip out = clip;
   out.warnings.clear();
   const int wanted = std::max(1, static_cast<int>(fraction * clip.skeleton.joint_count()));
   for (int removed = 0; removed < wanted; ++removed) {
     std::vector<int> candidates = removable_joints(out.skeleton);
     // Keep at least two joints; per-frame checks may still refuse a candidate.
-    std::shuffle(candidates.begin(), candidates.end(), rng);
+    rng.shuffle(candidates);
     bool done = false;
     for (int j : candidates) {
       if (out.skeleton.joint_count() <= 2) break;
@@ -268,24 +266,23 @@ Clip subdivide_bone(const Clip& clip, int joint, double fraction) {
   return out;
 }
 
-Clip subdivide_bones(const Clip& clip, std::mt19937& rng, double fraction) {
+Clip subdivide_bones(const Clip& clip, SplitMix64& rng, double fraction) {
   Clip out = clip;
   out.warnings.clear();
   const int wanted = std::max(1, static_cast<int>(fraction * clip.skeleton.joint_count()));
-  std::uniform_real_distribution<double> where(0.3, 0.7);
   for (int k = 0; k < wanted; ++k) {
     std::vector<int> candidates;
     for (int j = 1; j < out.skeleton.joint_count(); ++j) {
       if (out.skeleton.offsets[j].norm() > kZeroLength) candidates.push_back(j);
     }
     if (candidates.empty()) break;
-    std::uniform_int_distribution<size_t> pick(0, candidates.size() - 1);
-    out = subdivide_bone(out, candidates[pick(rng)], where(rng));
+    const int joint = candidates[rng.below(candidates.size())];
+    out = subdivide_bone(out, joint, rng.uniform(0.3, 0.7));
   }
   return out;
 }
 
-Clip augment(const Clip& clip, AugmentKind kind, const std::vector<std::string>& canonical_names, std::mt19937& rng) {
+Clip augment(const Clip& clip, AugmentKind kind, const std::vector<std::string>& canonical_names, SplitMix64& rng) {
   switch (kind) {
     case AugmentKind::RestPose:
       return reset_rest_pose(clip, rng);

@@ -3,9 +3,9 @@
 
 #include "nec/motion/error.h"
 #include "nec/motion/names.h"
+#include "nec/motion/random.h"
 
 #include <algorithm>
-#include <random>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -13,34 +13,12 @@ namespace nec {
 
 namespace {
 
-// splitmix64: a small, portable generator whose stream depends only on its seed
-// (std:: distributions differ between standard libraries).
-uint64_t mix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
 constexpr uint64_t kOrderStream = ~uint64_t{0};  // stream of the epoch order; items use their position
 constexpr uint64_t kBucketStream = ~uint64_t{1};  // stream of the batch order when bucketing by joint count
 
 uint64_t stream_seed(uint64_t seed, int epoch, uint64_t stream) {
   return mix64(mix64(mix64(seed) ^ static_cast<uint64_t>(epoch)) ^ stream);
 }
-
-class Random {
- public:
-  explicit Random(uint64_t seed) : state_(seed) {}
-  uint64_t next() { return mix64(state_++); }
-  // Uniform in [0, n), n > 0.
-  uint64_t below(uint64_t n) { return next() % n; }
-  // Uniform in [0, 1).
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-
- private:
-  uint64_t state_;
-};
 
 // One item before padding.
 struct Item {
@@ -161,8 +139,7 @@ int BatchLoader::batches_per_epoch() const {
 std::vector<int> BatchLoader::epoch_order(int epoch) const {
   std::vector<int> order = clips_;
   if (!options_.shuffle) return order;
-  Random random(stream_seed(options_.seed, epoch, kOrderStream));
-  for (size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[random.below(i)]);
+  SplitMix64(stream_seed(options_.seed, epoch, kOrderStream)).shuffle(order);
   if (options_.joint_buckets == 0) return order;
 
   // Sort runs of joint_buckets batches by joint count, then shuffle whole batches.
@@ -175,8 +152,7 @@ std::vector<int> BatchLoader::epoch_order(int epoch) const {
   const size_t full = order.size() / batch;  // a smaller last batch stays last
   std::vector<size_t> batches(full);
   for (size_t i = 0; i < full; ++i) batches[i] = i;
-  Random batch_random(stream_seed(options_.seed, epoch, kBucketStream));
-  for (size_t i = full; i > 1; --i) std::swap(batches[i - 1], batches[batch_random.below(i)]);
+  SplitMix64(stream_seed(options_.seed, epoch, kBucketStream)).shuffle(batches);
   std::vector<int> shuffled;
   shuffled.reserve(order.size());
   for (size_t b : batches) shuffled.insert(shuffled.end(), order.begin() + b * batch, order.begin() + (b + 1) * batch);
@@ -228,7 +204,7 @@ Batch BatchLoader::assemble(const std::vector<int>& order, int epoch, int index)
     item.clip = order[position];
     const CacheClip& c = cache_.clips[item.clip];
     const CachedSkeleton& stored = cache_.skeletons[c.skeleton];
-    Random random(stream_seed(options_.seed, epoch, position));
+    SplitMix64 random(stream_seed(options_.seed, epoch, position));
 
     if (!c.captions.empty()) item.caption = c.captions[random.below(c.captions.size())];
     int count = c.frame_count;
@@ -242,9 +218,7 @@ Batch BatchLoader::assemble(const std::vector<int>& order, int epoch, int index)
 
     if (options_.augment_probability > 0.0 && random.uniform() < options_.augment_probability) {
       const AugmentKind kind = options_.augment_kinds[random.below(options_.augment_kinds.size())];
-      const uint64_t seed = random.next();
-      std::seed_seq seed_words{static_cast<uint32_t>(seed), static_cast<uint32_t>(seed >> 32)};
-      std::mt19937 rng(seed_words);
+      SplitMix64 rng(random.next());
       const Clip source{stored.skeleton, decode_features(stored.skeleton, item.features), {}};
       Clip changed = augment(source, kind, stored.canonical_names, rng);
       if (changed.motion.frame_count != count) {

@@ -5,6 +5,7 @@
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
+#include "nec/motion/random.h"
 
 #include <nlohmann/json.hpp>
 
@@ -62,14 +63,6 @@ uint64_t fnv1a(std::string_view bytes, uint64_t hash = 0xcbf29ce484222325ull) {
     hash *= 0x100000001b3ull;
   }
   return hash;
-}
-
-// splitmix64 finalizer: spreads the bits of a hash.
-uint64_t mix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
 }
 
 std::string hex16(uint64_t value) {

@@ -29,20 +29,11 @@ std::vector<std::string> path_words(const std::string& path) {
   return words;
 }
 
-uint64_t mix(uint64_t x) {  // splitmix64 finalizer
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
 void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument("AugmentOptions: " + message);
 }
 
-bool chance(std::mt19937& rng, double probability) {
-  return probability > 0.0 && std::uniform_real_distribution<double>(0.0, 1.0)(rng) < probability;
-}
+bool chance(SplitMix64& rng, double probability) { return probability > 0.0 && rng.chance(probability); }
 
 }  // namespace
 
@@ -90,7 +81,7 @@ std::vector<PretrainSkeleton> skeletons_from_cache(const DatasetCache& cache, in
       auto found = decoded.find(clip_index);
       if (found == decoded.end()) found = decoded.emplace(clip_index, cache.clip(clip_index)).first;
       const Motion& source = found->second.motion;
-      const int frame = static_cast<int>(mix(seed ^ mix(static_cast<uint64_t>(s) * 1000003u + k)) %
+      const int frame = static_cast<int>(mix64(seed ^ mix64(static_cast<uint64_t>(s) * 1000003u + k)) %
                                          static_cast<uint64_t>(source.frame_count));
       for (int j = 0; j < joints; ++j) {
         motion.rotation(k, j) = source.rotation(frame, j);
@@ -164,13 +155,13 @@ void AugmentOptions::validate() const {
   require(joint_fraction > 0.0 && joint_fraction <= 0.5, "joint_fraction must be in (0, 0.5]");
 }
 
-AugmentedSkeleton augment_skeleton(const PretrainSkeleton& skeleton, const AugmentOptions& options, std::mt19937& rng) {
+AugmentedSkeleton augment_skeleton(const PretrainSkeleton& skeleton, const AugmentOptions& options, SplitMix64& rng) {
   AugmentedSkeleton out{skeleton.skeleton, skeleton.canonical_names};
   if (!chance(rng, options.probability)) return out;
   Clip clip{skeleton.skeleton, Motion::rest(skeleton.skeleton, 1, skeleton.poses.fps), {}};
   bool changed = false;
   if (skeleton.poses.frame_count > 0 && chance(rng, options.rest_pose)) {
-    const int frame = std::uniform_int_distribution<int>(0, skeleton.poses.frame_count - 1)(rng);
+    const int frame = rng.integer(0, skeleton.poses.frame_count - 1);
     const Clip posed = reset_rest_pose_to_frame(Clip{skeleton.skeleton, skeleton.poses, {}}, frame);
     clip = Clip{posed.skeleton, Motion::rest(posed.skeleton, 1, skeleton.poses.fps), {}};
     changed = true;

@@ -39,13 +39,6 @@ void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument(message);
 }
 
-uint64_t mix(uint64_t x) {  // splitmix64 finalizer
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
 // Reads an object of a config file: optional fields with checked types, and
 // no field it does not know.
 class ConfigFields {
@@ -345,6 +338,29 @@ SkeletonSet load_skeleton_set(const std::vector<std::string>& caches, const Hold
   return set;
 }
 
+SkeletonSet split_as_trained(SkeletonSet set, const std::vector<std::string>& trained_hashes) {
+  const std::set<std::string> trained(trained_hashes.begin(), trained_hashes.end());
+  SkeletonSet out;
+  out.unmatched_patterns = std::move(set.unmatched_patterns);
+  for (PretrainSkeleton& s : set.held_out) {
+    if (trained.count(s.hash)) {
+      s.group = "train";
+      out.train.push_back(std::move(s));
+    } else {
+      out.held_out.push_back(std::move(s));
+    }
+  }
+  for (PretrainSkeleton& s : set.train) {
+    if (trained.count(s.hash)) {
+      out.train.push_back(std::move(s));
+    } else {
+      s.group = "not in its training set";
+      out.held_out.push_back(std::move(s));
+    }
+  }
+  return out;
+}
+
 std::optional<OwoTrainingRecord> read_owo_training_record(const std::string& dir) {
   const std::optional<train::TrainingState> state = train::read_training_state(dir, "owo");
   if (!state) return std::nullopt;
@@ -401,24 +417,23 @@ at::Tensor OwoTrainer::names_of(const std::vector<std::string>& canonical_names)
 }
 
 PretrainLosses OwoTrainer::step(int64_t step) {
-  const uint64_t stream = mix(config_.seed ^ mix(static_cast<uint64_t>(step)));
-  std::mt19937 rng(static_cast<uint32_t>(stream));
+  const uint64_t stream = mix64(config_.seed ^ mix64(static_cast<uint64_t>(step)));
+  SplitMix64 rng(stream);
 
   // A bucket with probability proportional to its size, then skeletons uniformly within it.
-  const size_t anchor = std::uniform_int_distribution<size_t>(0, skeletons_.train.size() - 1)(rng);
+  const size_t anchor = rng.below(skeletons_.train.size());
   size_t bucket = 0;
   for (size_t seen = 0; bucket < buckets_.size(); ++bucket) {
     seen += buckets_[bucket].size();
     if (anchor < seen) break;
   }
   const std::vector<size_t>& members = buckets_[std::min(bucket, buckets_.size() - 1)];
-  std::uniform_int_distribution<size_t> pick(0, members.size() - 1);
   // Up to batch_size skeletons, fewer when B * Jmax^2 would pass batch_joint_pairs (at least one).
   // Every rank draws the whole batch alike and keeps its share.
   std::vector<AugmentedSkeleton> rigs;
   int64_t largest = 0;
   for (int64_t b = 0; b < config_.batch_size; ++b) {
-    const PretrainSkeleton& source = skeletons_.train[members[pick(rng)]];
+    const PretrainSkeleton& source = skeletons_.train[members[rng.below(members.size())]];
     AugmentedSkeleton rig = augment_skeleton(source, config_.data.augment, rng);
     const int64_t joints = std::max<int64_t>(largest, rig.skeleton.joint_count());
     if (b > 0 && config_.batch_joint_pairs > 0 && (b + 1) * joints * joints > config_.batch_joint_pairs) break;
@@ -437,7 +452,7 @@ PretrainLosses OwoTrainer::step(int64_t step) {
       graphs.push_back(make_skeleton_graph(rigs[i].skeleton, names_of(rigs[i].canonical_names), config_.encoder.graph));
     }
     const GraphBatch batch = collate(graphs, config_.encoder.name_dim).to(device_);
-    torch::manual_seed(mix(stream) >> 1);  // the sampled joint pairs
+    torch::manual_seed(mix64(stream) >> 1);  // the sampled joint pairs
     losses = model_->backward(batch, weight);
   }
   const train::OptimizerStep taken =
@@ -529,12 +544,9 @@ int64_t OwoTrainer::resume(const std::string& dir) {
   const std::string record_path = (fs::path(dir) / train::kTrainingStateFile).string();
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw InputError(dir, 0, "no such checkpoint directory to resume from");
-  const std::optional<train::TrainingState> state = train::read_training_state(dir, "owo");
-  if (!state) {
-    throw InputError(record_path, 0,
-                     "missing: not a checkpoint written by `nec train owo`, nothing to resume; train into a new --out");
-  }
-  train::check_resumable(*state, config_to_json(config_), kScheduleFields, record_path);
+  LoadedOwoCheckpoint loaded = load_owo_checkpoint(dir);
+  const train::TrainingState state = train::resumable_state(dir, "owo", loaded.info.training_step);
+  train::check_resumable(state, config_to_json(config_), kScheduleFields, record_path);
   const std::optional<OwoTrainingRecord> record = read_owo_training_record(dir);
   std::set<std::string> then(record->train_skeletons.begin(), record->train_skeletons.end()), now;
   for (const PretrainSkeleton& s : skeletons_.train) now.insert(s.hash);
@@ -548,19 +560,7 @@ int64_t OwoTrainer::resume(const std::string& dir) {
                          "a new --out");
   }
 
-  LoadedOwoCheckpoint loaded = load_owo_checkpoint(dir);
-  if (loaded.info.training_step != record->step) {
-    throw InputError(record_path, 0,
-                     "step " + std::to_string(record->step) + " but config.json says " +
-                         std::to_string(loaded.info.training_step) + "; the checkpoint is damaged");
-  }
-  {
-    torch::NoGradGuard no_grad;
-    auto source = loaded.model->named_parameters();
-    for (auto& item : model_->named_parameters()) item.value().copy_(source[item.key()]);
-    auto buffers = loaded.model->named_buffers();
-    for (auto& item : model_->named_buffers()) item.value().copy_(buffers[item.key()]);
-  }
+  train::copy_module_tensors(*loaded.model, *model_);
   train::load_optimizer_state(dir, *optimizer_, device_);
   schedule_ = train::LearningRateSchedule::resumed(config_.optimizer, record->schedule, record->step, config_.steps,
                                                    record_path);

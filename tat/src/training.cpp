@@ -334,32 +334,17 @@ void TatTrainer::save(const std::string& dir, int64_t step) {
 
 int64_t TatTrainer::resume(const std::string& dir) {
   const std::string state_path = (std::filesystem::path(dir) / train::kTrainingStateFile).string();
-  const std::optional<train::TrainingState> state = train::read_training_state(dir, "tat");
-  if (!state) {
-    throw InputError(state_path, 0,
-                     "missing: not a checkpoint written by `nec train tat`, nothing to resume; train into a new --out");
-  }
-  train::check_resumable(*state, to_json(config_), kScheduleFields, state_path);
   LoadedTatCheckpoint loaded = load_tat_checkpoint(dir);
-  if (loaded.info.training_step != state->step) {
-    throw InputError(state_path, 0,
-                     "step " + std::to_string(state->step) + " but config.json says " +
-                         std::to_string(loaded.info.training_step) + "; the checkpoint is damaged");
-  }
-  {
-    torch::NoGradGuard no_grad;
-    auto parameters = loaded.tokenizer->named_parameters();
-    for (auto& item : tokenizer_->named_parameters()) item.value().copy_(parameters[item.key()]);
-    auto buffers = loaded.tokenizer->named_buffers();
-    for (auto& item : tokenizer_->named_buffers()) item.value().copy_(buffers[item.key()]);
-  }
+  const train::TrainingState state = train::resumable_state(dir, "tat", loaded.info.training_step);
+  train::check_resumable(state, to_json(config_), kScheduleFields, state_path);
+  train::copy_module_tensors(*loaded.tokenizer, *tokenizer_);
   train::load_optimizer_state(dir, *optimizer_, device_);
-  schedule_ = train::LearningRateSchedule::resumed(config_.optimizer, state->schedule, state->step, config_.steps,
+  schedule_ = train::LearningRateSchedule::resumed(config_.optimizer, state.schedule, state.step, config_.steps,
                                                    state_path);
   const train::JsonFields fields(state_path, "the training state is damaged; train again into a new --out");
   int64_t epoch = 0, index = 0;
-  fields.read(state->data, "epoch", "data.", epoch);
-  fields.read(state->data, "index", "data.", index);
+  fields.read(state.data, "epoch", "data.", epoch);
+  fields.read(state.data, "index", "data.", index);
   try {
     train_->seek(static_cast<int>(epoch), static_cast<int>(index));
   } catch (const std::out_of_range&) {
@@ -367,7 +352,7 @@ int64_t TatTrainer::resume(const std::string& dir) {
                      "batch " + std::to_string(index) + " of epoch " + std::to_string(epoch) +
                          " is not in this train split; resume with the same --data, or train into a new --out");
   }
-  return state->step;
+  return state.step;
 }
 
 ReconstructionMetrics TatTrainer::evaluate(const Batch& batch) {

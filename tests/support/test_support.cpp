@@ -87,6 +87,12 @@ Motion random_motion(std::mt19937& rng, const Skeleton& skeleton, int frames) {
   return m;
 }
 
+std::unique_ptr<TempDir> SharedFolderTest::shared_;
+
+void SharedFolderTest::SetUpTestSuite() { shared_ = std::make_unique<TempDir>(); }
+
+void SharedFolderTest::TearDownTestSuite() { shared_.reset(); }
+
 TempDir::TempDir() {
   std::random_device entropy;
   path_ = std::filesystem::temp_directory_path() / ("nec_test_" + std::to_string(entropy()) + std::to_string(entropy()));

@@ -3,7 +3,10 @@
 
 #include "nec/motion/motion.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -41,6 +44,27 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+// A test suite whose tests share one folder, made before its first test
+// (SetUpTestSuite of the derived suite fills it) and removed after its last,
+// and a folder of each test's own.
+class SharedFolderTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite();
+  static void TearDownTestSuite();
+  static const TempDir& shared_folder() { return *shared_; }
+  // Full path of `relative` in the shared folder / in this test's folder.
+  static std::string shared(const std::string& relative) { return *shared_ / relative; }
+  std::string path(const std::string& relative) const { return dir_ / relative; }
+
+  TempDir dir_;
+
+ private:
+  static std::unique_ptr<TempDir> shared_;
+};
+
+// `part` occurs in `text`.
+inline bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // The built `nec` binary run with `arguments` (a shell command line), stdout and stderr together.
 struct CommandResult {

@@ -5,6 +5,7 @@
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/motion/names.h"
+#include "nec/motion/random.h"
 
 
 #include <algorithm>
@@ -49,13 +50,6 @@ size_t round_up_64(size_t value) { return (value + 63) / 64 * 64; }
 
 [[noreturn]] void fail(const std::string& path, const std::string& problem) {
   throw InputError(path, 0, problem + "; " + kWordVectorHint);
-}
-
-uint64_t splitmix64(uint64_t& state) {
-  uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
 }
 
 uint64_t fnv1a64(std::string_view bytes) {
@@ -104,11 +98,11 @@ std::vector<std::string> canonical_words(std::string_view joint_name) {
 Vector fallback_vector(std::string_view word, int dim) {
   Vector v(static_cast<size_t>(std::max(dim, 0)));
   if (v.empty()) return v;
-  uint64_t state = fnv1a64(word);
+  SplitMix64 random(fnv1a64(word));
   double sum = 0;
   for (float& x : v) {
     // 24 random bits -> a float in [-1, 1), exact.
-    x = static_cast<float>(static_cast<int32_t>(splitmix64(state) >> 40) - (1 << 23)) / static_cast<float>(1 << 23);
+    x = static_cast<float>(static_cast<int32_t>(random.next() >> 40) - (1 << 23)) / static_cast<float>(1 << 23);
     sum += static_cast<double>(x) * x;
   }
   if (sum == 0) {

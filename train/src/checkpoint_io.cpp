@@ -157,6 +157,14 @@ void load_module_tensors(torch::nn::Module& module, const std::string& path, con
   }
 }
 
+void copy_module_tensors(torch::nn::Module& from, torch::nn::Module& to) {
+  torch::NoGradGuard no_grad;
+  auto parameters = from.named_parameters();
+  for (auto& item : to.named_parameters()) item.value().copy_(parameters[item.key()]);
+  auto buffers = from.named_buffers();
+  for (auto& item : to.named_buffers()) item.value().copy_(buffers[item.key()]);
+}
+
 void write_checkpoint_directory(const std::string& dir, const std::string& what,
                                 const std::function<void(const std::string& temp_dir)>& fill) {
   fs::path target = fs::path(dir);

@@ -171,7 +171,9 @@ std::unique_ptr<Communicator> Communicator::connect(const DistributedConfig& con
   try {
     c10d::TCPStoreOptions options;
     options.port = static_cast<std::uint16_t>(config.master_port);
-    options.isServer = config.rank == 0;
+    // Under torchrun's elastic agent the agent serves the store and every worker is its client.
+    const char* agent_store = std::getenv("TORCHELASTIC_USE_AGENT_STORE");
+    options.isServer = config.rank == 0 && !(agent_store != nullptr && std::string(agent_store) == "True");
     options.numWorkers = static_cast<std::size_t>(config.world_size);
     options.waitWorkers = true;
     options.timeout = state->timeout();

@@ -98,6 +98,7 @@ int run_local_workers(const std::string& program, const std::vector<std::string>
   size_t left = workers.size();
   int result = 0;
   bool stopping = false;
+  bool forwarded = false;  // an interrupt was passed on: workers that checkpoint and exit 130 did as asked
   auto stop_time = std::chrono::steady_clock::time_point::max();
   auto signal_all = [&](int signal_number) {
     for (size_t r = 0; r < workers.size(); ++r) {
@@ -107,6 +108,7 @@ int run_local_workers(const std::string& program, const std::vector<std::string>
   while (left > 0) {
     if (const int received = g_forward_signal; received != 0) {
       g_forward_signal = 0;
+      forwarded = true;
       signal_all(received);  // every worker checkpoints and stops, as one process would
     }
     int status = 0;
@@ -117,7 +119,9 @@ int run_local_workers(const std::string& program, const std::vector<std::string>
         running[r] = false;
         --left;
         const int code = exit_code_of(status);
-        if (code != 0 && !stopping) {
+        if (forwarded && code == 130) {
+          result = result == 0 ? code : result;
+        } else if (code != 0 && !stopping) {
           std::fprintf(log, "nec: rank %zu %s; stopping the other %zu rank(s)\n", r, describe(status).c_str(), left);
           std::fflush(log);
           result = code;

@@ -92,6 +92,22 @@ std::optional<TrainingState> read_training_state(const std::string& dir, const s
   return state;
 }
 
+TrainingState resumable_state(const std::string& dir, const std::string& model, int64_t model_step) {
+  const std::string path = (fs::path(dir) / kTrainingStateFile).string();
+  std::optional<TrainingState> state = read_training_state(dir, model);
+  if (!state) {
+    throw InputError(path, 0,
+                     "missing: not a checkpoint written by `nec train " + model +
+                         "`, nothing to resume; train into a new --out");
+  }
+  if (state->step != model_step) {
+    throw InputError(path, 0,
+                     "step " + std::to_string(state->step) + " but config.json says " + std::to_string(model_step) +
+                         "; the checkpoint is damaged");
+  }
+  return std::move(*state);
+}
+
 void load_optimizer_state(const std::string& dir, torch::optim::Optimizer& optimizer, const c10::Device& device) {
   const std::string path = (fs::path(dir) / kOptimizerStateFile).string();
   std::error_code ec;

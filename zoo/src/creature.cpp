@@ -10,6 +10,8 @@
 // the bones are fitted so that the leg's last joint lands on y = 0.
 #include "nec/zoo/creature.h"
 
+#include "nec/motion/random.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -25,35 +27,15 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 double radians(double degrees) { return degrees * kPi / 180.0; }
 
-// ---- deterministic random numbers ----
-// SplitMix64 with our own distributions: the standard library's distributions
-// differ between implementations, and a seed must give the same creature everywhere.
-class Random {
- public:
-  explicit Random(uint64_t seed) : state_(seed) {}
-
-  uint64_t next() {
-    uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
-  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
-  int integer(int lo, int hi) { return lo + static_cast<int>(next() % static_cast<uint64_t>(hi - lo + 1)); }  // [lo, hi]
-  bool chance(double probability) { return uniform() < probability; }
-
- private:
-  uint64_t state_;
-};
+// ---- deterministic random numbers (motion/random.h: the same creature for a seed everywhere) ----
 
 // Independent random streams of one (plan, seed): the body, the style options, the units.
 enum class Stream : uint64_t { Body = 1, Options = 2, Units = 3 };
 
-Random stream(BodyPlan plan, uint64_t seed, Stream which) {
-  Random mixer(seed ^ (0xD1B54A32D192ED03ull * (static_cast<uint64_t>(plan) + 1)) ^
+SplitMix64 stream(BodyPlan plan, uint64_t seed, Stream which) {
+  SplitMix64 mixer(seed ^ (0xD1B54A32D192ED03ull * (static_cast<uint64_t>(plan) + 1)) ^
                (0x8CB92BA72F3D8DD7ull * static_cast<uint64_t>(which)));
-  return Random(mixer.next());
+  return SplitMix64(mixer.next());
 }
 
 // ---- joint names ----
@@ -482,7 +464,7 @@ Vec3 spread(const Vec3& out, RestPose pose, double droop_limit = 45.0) {
   return pose == RestPose::TPose ? out : elevated(out, -std::min(45.0, droop_limit));
 }
 
-void build_biped(Body& body, Random& rng, RestPose pose) {
+void build_biped(Body& body, SplitMix64& rng, RestPose pose) {
   body.species = "person";
   const bool crouched = pose == RestPose::Crouched;
   const double height = rng.uniform(1.5, 1.95);
@@ -603,7 +585,7 @@ struct FourLegged {
   bool wings;
 };
 
-void build_four_legged(Body& body, Random& rng, RestPose pose, const FourLegged& plan) {
+void build_four_legged(Body& body, SplitMix64& rng, RestPose pose, const FourLegged& plan) {
   const QuadrupedSpecies& sp = plan.species;
   body.species = sp.name;
   const bool crouched = pose == RestPose::Crouched;
@@ -729,12 +711,12 @@ void build_four_legged(Body& body, Random& rng, RestPose pose, const FourLegged&
   }
 }
 
-void build_quadruped(Body& body, Random& rng, RestPose pose) {
+void build_quadruped(Body& body, SplitMix64& rng, RestPose pose) {
   const QuadrupedSpecies& species = kQuadrupeds[rng.integer(0, static_cast<int>(std::size(kQuadrupeds)) - 1)];
   build_four_legged(body, rng, pose, {species, 2, 4, false});
 }
 
-void build_dragon(Body& body, Random& rng, RestPose pose) {
+void build_dragon(Body& body, SplitMix64& rng, RestPose pose) {
   const int neck_max = rng.integer(8, 12);
   const int tail_max = rng.integer(14, 20);
   const QuadrupedSpecies dragon{"dragon", 0.8, 2.0, 1.4, 0.05,     1.3, 35,  6, neck_max,
@@ -742,7 +724,7 @@ void build_dragon(Body& body, Random& rng, RestPose pose) {
   build_four_legged(body, rng, pose, {dragon, 3, 5, true});
 }
 
-void build_bird(Body& body, Random& rng, RestPose pose) {
+void build_bird(Body& body, SplitMix64& rng, RestPose pose) {
   body.species = "bird";
   const bool crouched = pose == RestPose::Crouched;
   const double leg = rng.uniform(0.12, 0.9);
@@ -835,7 +817,7 @@ std::vector<int> add_fin(Body& body, int parent, const Vec3& base, const Vec3& d
   return body.add_chain(parent, chain_specs(Part::Fin, count, side, qualifier), walk(base, steps));
 }
 
-void build_fish(Body& body, Random& rng, RestPose pose) {
+void build_fish(Body& body, SplitMix64& rng, RestPose pose) {
   body.species = "fish";
   const double length = rng.uniform(0.25, 1.5);  // snout to tail fin
   const int spine_count = rng.integer(1, 2);
@@ -899,7 +881,7 @@ void build_fish(Body& body, Random& rng, RestPose pose) {
   body.tail_tip = caudal_points.back();
 }
 
-void build_snake(Body& body, Random& rng, RestPose pose) {
+void build_snake(Body& body, SplitMix64& rng, RestPose pose) {
   body.species = "snake";
   const int total = rng.integer(20, 60);  // joints without the jaw
   const double length = rng.uniform(0.8, 3.5);
@@ -954,7 +936,7 @@ constexpr std::array<double, 2> kInsectLean{60.0, 40.0};
 constexpr std::array<double, 2> kSpiderLean{62.0, 45.0};
 constexpr std::array<double, 2> kCentipedeLean{70.0, 50.0};
 
-void build_hexapod(Body& body, Random& rng, RestPose pose) {
+void build_hexapod(Body& body, SplitMix64& rng, RestPose pose) {
   const bool ant = rng.chance(0.5);
   body.species = ant ? "ant" : "beetle";
   const double length = rng.uniform(0.05, 0.5);  // head to abdomen tip
@@ -1014,7 +996,7 @@ void build_hexapod(Body& body, Random& rng, RestPose pose) {
   }
 }
 
-void build_spider(Body& body, Random& rng, RestPose pose) {
+void build_spider(Body& body, SplitMix64& rng, RestPose pose) {
   body.species = "spider";
   const double length = rng.uniform(0.05, 0.6);  // head to abdomen tip
   const int leg_joints = rng.integer(3, 5);
@@ -1069,7 +1051,7 @@ void build_spider(Body& body, Random& rng, RestPose pose) {
   }
 }
 
-void build_centipede(Body& body, Random& rng, RestPose pose) {
+void build_centipede(Body& body, SplitMix64& rng, RestPose pose) {
   body.species = "centipede";
   // Segments (one leg pair each) and leg joints within 140 joints: fewer leg
   // joints first, then fewer segments.
@@ -1282,7 +1264,7 @@ std::vector<const Limb*> Creature::limbs_of(LimbKind kind) const {
 }
 
 CreatureOptions sample_creature_options(BodyPlan plan, uint64_t seed) {
-  Random rng = stream(plan, seed, Stream::Options);
+  SplitMix64 rng = stream(plan, seed, Stream::Options);
   CreatureOptions options;
   const double naming = rng.uniform();
   options.naming = naming < 0.25   ? NamingStyle::Mixamo
@@ -1302,7 +1284,7 @@ Creature make_creature(BodyPlan plan, uint64_t seed) {
 }
 
 Creature make_creature(BodyPlan plan, uint64_t seed, const CreatureOptions& options) {
-  Random rng = stream(plan, seed, Stream::Body);
+  SplitMix64 rng = stream(plan, seed, Stream::Body);
   Body body;
   switch (plan) {
     case BodyPlan::Biped: build_biped(body, rng, options.rest_pose); break;
@@ -1315,7 +1297,7 @@ Creature make_creature(BodyPlan plan, uint64_t seed, const CreatureOptions& opti
     case BodyPlan::Dragon: build_dragon(body, rng, options.rest_pose); break;
     case BodyPlan::Centipede: build_centipede(body, rng, options.rest_pose); break;
   }
-  Random units = stream(plan, seed, Stream::Units);
+  SplitMix64 units = stream(plan, seed, Stream::Units);
   return finish(plan, seed, options, std::move(body), units.chance(0.4) ? 100.0 : 1.0);
 }
 

@@ -79,26 +79,8 @@ Quat aim_chain(const Skeleton& skeleton, const std::vector<int>& chain, const st
 }
 
 uint64_t mix_seed(uint64_t a, uint64_t b) {
-  uint64_t z = a * 0x9E3779B97F4A7C15ULL + b + 0x632BE59BD9B4E019ULL;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
+  // SplitMix64's output function of a * gamma + b + 0x632BE59BD9B4E019 (mix64 adds one gamma itself).
+  return mix64(a * kSplitMixGamma + b + (0x632BE59BD9B4E019ULL - kSplitMixGamma));
 }
-
-uint64_t SeededRandom::next() {
-  state_ += 0x9E3779B97F4A7C15ULL;
-  uint64_t z = state_;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
-
-double SeededRandom::uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-
-double SeededRandom::uniform(double low, double high) { return low + (high - low) * uniform(); }
-
-int SeededRandom::below(int n) { return static_cast<int>(next() % static_cast<uint64_t>(std::max(n, 1))); }
-
-bool SeededRandom::chance(double probability) { return uniform() < probability; }
 
 }  // namespace nec::zoo

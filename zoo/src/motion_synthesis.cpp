@@ -534,7 +534,7 @@ class Synthesizer {
   const Skeleton& skeleton_;
   const Rig& rig_;
   MotionSpec spec_;
-  SeededRandom style_;
+  SplitMix64 style_;
   int joint_count_ = 0;
   int frames_ = 0;
   int pad_ = 0;

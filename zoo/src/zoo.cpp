@@ -60,7 +60,7 @@ bool is_held_out(const ZooOptions& options, BodyPlan plan) {
 Action clip_action(const Creature& creature, int clip_index) {
   std::vector<Action> actions = supported_actions(creature.plan);
   const int n = static_cast<int>(actions.size());
-  SeededRandom random(mix_seed(creature.seed, 0xAC7100 + static_cast<uint64_t>(clip_index / n)));
+  SplitMix64 random(mix_seed(creature.seed, 0xAC7100 + static_cast<uint64_t>(clip_index / n)));
   for (int i = n - 1; i > 0; --i) std::swap(actions[i], actions[random.below(i + 1)]);
   return actions[clip_index % n];
 }
@@ -138,7 +138,7 @@ uint64_t zoo_creature_seed(const ZooOptions& options, int index) {
 
 MotionSpec zoo_clip_spec(const Creature& creature, const ZooOptions& options, int clip_index) {
   const uint64_t clip_seed = mix_seed(creature.seed, 1 + static_cast<uint64_t>(clip_index));
-  SeededRandom random(clip_seed);
+  SplitMix64 random(clip_seed);
   MotionSpec spec;
   spec.action = clip_action(creature, clip_index);
   spec.seconds = options.seconds;

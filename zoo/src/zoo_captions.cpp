@@ -28,7 +28,7 @@ class Phraser {
   bool chance(double probability) { return random_.chance(probability); }
 
  private:
-  SeededRandom random_;
+  SplitMix64 random_;
 };
 
 bool starts_with_vowel_sound(const std::string& word) {

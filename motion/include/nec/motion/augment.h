@@ -1,6 +1,6 @@
 // Rig augmentation (NECromancer C.1; Dragon 4.2): new rigs for the same motion.
 //
-//   std::mt19937 rng(seed);
+//   SplitMix64 rng(seed);                          // motion/random.h
 //   Clip a = reset_rest_pose(clip, rng);          // global joint positions unchanged
 //   Clip b = scale_bone_lengths(clip, names, rng); // per body part 0.8–1.2, left = right
 //   Clip c = remove_joints(clip, rng);             // distal or zero-length joints
@@ -11,8 +11,8 @@
 #pragma once
 
 #include "nec/motion/motion.h"
+#include "nec/motion/random.h"
 
-#include <random>
 #include <string>
 #include <vector>
 
@@ -22,14 +22,14 @@ enum class AugmentKind { RestPose, BoneLength, JointRemoval, Subdivision };
 
 // A random frame becomes the rest pose; offsets and rotations are recomputed
 // so FK positions of every joint are unchanged.
-Clip reset_rest_pose(const Clip& clip, std::mt19937& rng);
+Clip reset_rest_pose(const Clip& clip, SplitMix64& rng);
 Clip reset_rest_pose_to_frame(const Clip& clip, int frame);
 
 // Body part of a joint from its canonical name and chain: "spine", "neck",
 // "head", "tail", "arm", "leg", "wing", "fin", "other". Left/right joints of
 // the same part get the same factor.
 std::vector<std::string> body_parts(const Skeleton& skeleton, const std::vector<std::string>& canonical_names);
-Clip scale_bone_lengths(const Clip& clip, const std::vector<std::string>& canonical_names, std::mt19937& rng,
+Clip scale_bone_lengths(const Clip& clip, const std::vector<std::string>& canonical_names, SplitMix64& rng,
                         double min_factor = 0.8, double max_factor = 1.2);
 
 // Joints that can be removed exactly: leaves (toe tips, head tips, tail ends)
@@ -37,13 +37,13 @@ Clip scale_bone_lengths(const Clip& clip, const std::vector<std::string>& canoni
 std::vector<int> removable_joints(const Skeleton& skeleton);
 Clip remove_joint(const Clip& clip, int joint);
 // Removes up to max(1, fraction × J) random removable joints.
-Clip remove_joints(const Clip& clip, std::mt19937& rng, double fraction = 0.1);
+Clip remove_joints(const Clip& clip, SplitMix64& rng, double fraction = 0.1);
 
 // Inserts a joint at `fraction` along the bone from parent(joint) to joint.
 Clip subdivide_bone(const Clip& clip, int joint, double fraction = 0.5);
-Clip subdivide_bones(const Clip& clip, std::mt19937& rng, double fraction = 0.1);
+Clip subdivide_bones(const Clip& clip, SplitMix64& rng, double fraction = 0.1);
 
 // One random augmentation of the given kind.
-Clip augment(const Clip& clip, AugmentKind kind, const std::vector<std::string>& canonical_names, std::mt19937& rng);
+Clip augment(const Clip& clip, AugmentKind kind, const std::vector<std::string>& canonical_names, SplitMix64& rng);
 
 }  // namespace nec

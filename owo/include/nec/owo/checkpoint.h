@@ -1,6 +1,6 @@
 // OwO checkpoints: a pretrained OwoPretrainer (encoder + heads) as a directory
 //
-//   <dir>/config.json   {"format": "nec-owo", "version": 1, "architecture": "OwoPretrainer",
+//   <dir>/config.json   {"format": "nec-owo", "version": 2, "architecture": "OwoPretrainer",
 //                        "encoder": OwoConfig, "pretrain": PretrainConfig,
 //                        "training_step": 1200, "data": "zoo: 512 creatures, seed 3",
 //                        "tensors": "tensors.pt"}

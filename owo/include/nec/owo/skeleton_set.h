@@ -6,7 +6,7 @@
 //   std::vector<PretrainSkeleton> all = skeletons_from_cache(read_cache("zoo_cache"), /*poses=*/16, /*seed=*/1);
 //   HoldOut hold_out;  hold_out.patterns = {"spider", "snake"};
 //   SkeletonSet set = split_skeleton_set(all, hold_out);   // set.train, set.held_out
-//   std::mt19937 rng(step);
+//   SplitMix64 rng(step);
 //   AugmentedSkeleton rig = augment_skeleton(set.train[3], AugmentOptions{}, rng);  // new rest pose, lengths, joints
 //
 // A hold-out pattern ('*' and '?' wildcards) takes a skeleton when it matches
@@ -21,9 +21,9 @@
 
 #include "nec/motion/dataset.h"
 #include "nec/motion/motion.h"
+#include "nec/motion/random.h"
 
 #include <cstdint>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -87,6 +87,6 @@ struct AugmentedSkeleton {
 
 // Draws one augmentation (possibly none) of `skeleton`. Kept joints keep their
 // names; canonical names are recomputed from the file names.
-AugmentedSkeleton augment_skeleton(const PretrainSkeleton& skeleton, const AugmentOptions& options, std::mt19937& rng);
+AugmentedSkeleton augment_skeleton(const PretrainSkeleton& skeleton, const AugmentOptions& options, SplitMix64& rng);
 
 }  // namespace nec::owo

@@ -107,6 +107,12 @@ struct OwoTrainingRecord {
   std::vector<std::string> held_out_skeletons;  // content hashes
 };
 
+// `set` re-split by what a run trained on (`trained_hashes`, its record's
+// train_skeletons), whatever the hold-out patterns say now: a held-out
+// skeleton it trained on moves to train (group "train"), a training skeleton
+// it never saw to held_out (group "not in its training set").
+SkeletonSet split_as_trained(SkeletonSet set, const std::vector<std::string>& trained_hashes);
+
 // <dir>/training.json, or std::nullopt when the directory has none (an OwO
 // checkpoint not written by nec train owo). Throws nec::InputError for a
 // damaged or foreign file.

@@ -81,6 +81,10 @@ void save_module_tensors(torch::nn::Module& module, const std::string& path);
 // half-loaded into a module the caller keeps only when this returns).
 void load_module_tensors(torch::nn::Module& module, const std::string& path, const std::string& hint);
 
+// Copies every parameter and buffer of `from` into the same-named one of `to`
+// (modules of one architecture: a loaded checkpoint into a trainer's model).
+void copy_module_tensors(torch::nn::Module& from, torch::nn::Module& to);
+
 // Creates a temporary sibling directory of `dir`, lets `fill` write into it,
 // flushes every file in it to disk, then swaps it into place (an existing checkpoint is moved aside first and
 // removed only after the swap), so `dir` is always the old or the new

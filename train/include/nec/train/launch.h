@@ -6,8 +6,9 @@
 //   // argv without --nproc; the workers read the environment (distributed.h)
 //   return run_local_workers("/proc/self/exe", args, 2, stderr);
 //
-// The launcher forwards SIGINT and SIGTERM to every worker. When one worker
-// fails (non-zero exit or a signal), the others get SIGTERM, then SIGKILL
+// The launcher forwards SIGINT and SIGTERM to every worker (which checkpoint
+// and exit 130: the launcher then exits 130 too). When one worker fails
+// (another non-zero exit or a signal), the others get SIGTERM, then SIGKILL
 // after `grace_seconds`; the launcher prints which rank failed and returns its
 // exit code (128 + signal for a signal).
 #pragma once

@@ -55,6 +55,11 @@ void write_training_state(const std::string& dir, const TrainingState& state, to
 // file, another format or version, or a state of another model than `model`.
 std::optional<TrainingState> read_training_state(const std::string& dir, const std::string& model);
 
+// The state a `--resume` of `nec train MODEL` needs from checkpoint `dir`: as
+// read_training_state, and InputError when there is none or its step is not
+// `model_step` (the step the model files of the checkpoint say).
+TrainingState resumable_state(const std::string& dir, const std::string& model, int64_t model_step);
+
 // Loads optimizer.pt of `dir` into `optimizer` (tensors onto `device`); InputError naming the file when it fails.
 void load_optimizer_state(const std::string& dir, torch::optim::Optimizer& optimizer, const c10::Device& device);
 

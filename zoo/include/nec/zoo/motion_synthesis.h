@@ -29,6 +29,8 @@
 // rate turns left: counter-clockwise seen from above (+Y).
 #pragma once
 
+#include "nec/motion/random.h"
+
 #include "nec/zoo/creature.h"
 
 #include <cstdint>
@@ -172,17 +174,5 @@ Quat aim_chain(const Skeleton& skeleton, const std::vector<int>& chain, const st
 // SplitMix64 mixing of two values: derived seeds, e.g. mix_seed(zoo_seed, creature_index).
 uint64_t mix_seed(uint64_t a, uint64_t b);
 
-class SeededRandom {
- public:
-  explicit SeededRandom(uint64_t seed) : state_(seed) {}
-  uint64_t next();
-  double uniform();                      // [0, 1)
-  double uniform(double low, double high);
-  int below(int n);                      // [0, n), n > 0
-  bool chance(double probability);
-
- private:
-  uint64_t state_;
-};
 
 }  // namespace nec::zoo

@@ -1,0 +1,69 @@
+// A trained tokenizer at work on files: BVH in, tokens out, and tokens onto
+// any skeleton as BVH in that file's own names, channels, units and up axis.
+// What `nec encode | decode | transfer` (and later `nec generate`) run.
+//
+//   TokenizerSession session = open_tokenizer_session("runs/tat", /*glove=*/"", /*overlap_frames=*/-1);
+//   const PreparedClip walk = prepare_for_model("walk.bvh", session.model.info.fps, UpAxis::Auto);
+//   const TokenFile tokens = encode_file(session, walk, "walk.bvh");
+//   decode_onto(session, tokens, "dragon.bvh", UpAxis::Auto, &walk.clip, /*free_feet=*/false, "dragon_walk.bvh");
+#pragma once
+
+#include "nec/motion/follow_heading.h"
+#include "nec/motion/foot_lock.h"
+#include "nec/motion/preprocess.h"
+#include "nec/tat/checkpoint.h"
+#include "nec/tat/inference.h"
+#include "nec/tat/tokens.h"
+#include "nec/text/word_vectors.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace nec::tat {
+
+// A loaded tokenizer with what it needs to embed skeletons.
+struct TokenizerSession {
+  LoadedTatCheckpoint model;
+  std::optional<text::WordVectors> vectors;  // loaded when the OwO encoder reads joint names
+  WindowOptions windows;
+
+  // (J, D) joint embeddings of one normalized skeleton; undefined for the zero-padding baseline.
+  at::Tensor embed(const Skeleton& skeleton, const std::vector<std::string>& canonical_names);
+};
+
+// Loads the checkpoint `model_dir` and the word vectors it reads (`glove`, or
+// the default file when empty; their width checked). `overlap_frames`: frames
+// neighbouring windows share, -1 for a quarter of the model's window (rounded
+// down to a multiple of 2 r). Throws InputError for the files,
+// std::invalid_argument for an overlap the windows cannot take.
+TokenizerSession open_tokenizer_session(const std::string& model_dir, const std::string& glove,
+                                        int64_t overlap_frames);
+
+// read_bvh + preprocess at the model's fps; InputError naming the file when it is rejected.
+PreparedClip prepare_for_model(const std::string& path, double fps, UpAxis up);
+
+// The yaw (degrees, about the up axis) of a normalization's frame-0 heading,
+// and a normalization that places normalized motion into `target`'s file
+// (its scale, up axis and ground origin) with the heading `heading_degrees`.
+double heading_degrees(const Normalization& normalization);
+Normalization with_heading(const Normalization& target, double heading_degrees);
+
+// Tokens of one clip prepared for the model; `path` names its file in the token file.
+TokenFile encode_file(TokenizerSession& session, const PreparedClip& source, const std::string& path);
+
+// What decode_onto did after decoding.
+struct DecodeReport {
+  std::optional<HeadingReport> heading;  // steered to follow a source's facing and path
+  FootLockReport feet;
+};
+
+// Decodes tokens onto the skeleton of `target_path`, steers it to face and go
+// where `heading_source` does (when given: the clip the tokens came from,
+// prepared for the model), pins the feet it puts down unless `free_feet`, and
+// writes `out_path` in that file's units, up axis, joint names, channels and
+// Euler orders. InputError when the tokens do not fit the model.
+DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path, UpAxis up,
+                         const Clip* heading_source, bool free_feet, const std::string& out_path);
+
+}  // namespace nec::tat
