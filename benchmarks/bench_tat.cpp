@@ -30,6 +30,7 @@
 #include "nec/tat/inference.h"
 #include "nec/tat/loss.h"
 #include "nec/tat/tokenizer.h"
+#include "nec/tat/synthetic.h"
 #include "nec/tat/training.h"
 
 #include <benchmark/benchmark.h>
@@ -112,52 +113,11 @@ PeakRss measure_peak_rss(Region&& region) {
   return out;
 }
 
-// ---- Synthetic inputs (peer_tat_step.py draws the same, in the same order). ----
-
-// (..., 6) Gaussian -> valid rot6D of Haar-random rotations (Gram-Schmidt).
-at::Tensor random_rot6d(at::IntArrayRef leading) {
-  std::vector<int64_t> shape(leading.begin(), leading.end());
-  shape.push_back(6);
-  return nec::tat::matrix_to_rot6d(nec::tat::rot6d_to_matrix(torch::randn(shape)));
-}
-
-// Θ (B, T, J, 9): root displacement ~ N(0, 0.02²) per frame, frame 0 at height
-// 0.9; other joints' translation channels zero; random rotations everywhere.
-at::Tensor random_features(int64_t batch, int64_t frames, int64_t joints) {
-  const at::Tensor rotations = random_rot6d({batch, frames, joints});
-  at::Tensor root_delta = torch::randn({batch, frames, 3}) * 0.02;
-  root_delta.select(1, 0).zero_();
-  root_delta.select(1, 0).select(1, 1).fill_(0.9);
-  at::Tensor translation = torch::zeros({batch, frames, joints, 3});
-  translation.select(2, 0).copy_(root_delta);
-  return torch::cat({translation, rotations}, -1);
-}
-
-struct SyntheticBatch {
-  BatchTensors batch;     // all joints and frames real
-  at::Tensor embeddings;  // (B, J, E) fixed, in place of OwO's
-};
-
-SyntheticBatch synthetic_batch(int64_t batch, int64_t frames, int64_t joints, int64_t embedding_dim) {
-  SyntheticBatch out;
-  out.batch.features = random_features(batch, frames, joints);
-  // parent(j) uniform in [0, j - 1]: a random tree with parents before children; -1 for the root.
-  const at::Tensor index = torch::arange(joints, torch::kLong);
-  out.batch.parents =
-      torch::minimum((torch::rand({batch, joints}) * index.to(torch::kFloat)).floor().to(torch::kLong), index - 1);
-  out.batch.offsets = torch::randn({batch, joints, 3}) * 0.1;
-  out.batch.offsets.select(1, 0).zero_();
-  out.batch.joint_mask = torch::ones({batch, joints}, torch::kBool);
-  out.batch.frame_mask = torch::ones({batch, frames}, torch::kBool);
-  out.embeddings = torch::randn({batch, joints, embedding_dim});
-  return out;
-}
-
 // ---- Training step ----
 
 // A model, its optimizer and one batch, kept across repetitions and thread counts.
 struct Trainee {
-  SyntheticBatch inputs;
+  nec::tat::SyntheticBatch inputs;
   Tokenizer model{nullptr};
   std::unique_ptr<torch::optim::AdamW> optimizer;
   int64_t parameters = 0;
@@ -166,22 +126,9 @@ struct Trainee {
   PeakRss memory;                    // of step kWarmupSteps + 1
 };
 
-// TatTrainer::step_on without the batch conversion and the OwO embeddings.
+// One step of the peer-comparable loop (tat/synthetic.h) at the next schedule position.
 double train_step(Trainee& t) {
-  const nec::tat::TatTrainConfig& config = train_config();
-  const double lr = nec::train::LearningRateSchedule(config.optimizer, config.steps).at(++t.steps);
-  t.model->train();
-  const BatchTensors& x = t.inputs.batch;
-  const nec::tat::TokenizerOutput out = t.model->forward(x.features, x.joint_mask, x.frame_mask, t.inputs.embeddings);
-  const nec::tat::ReconstructionLoss loss =
-      nec::tat::reconstruction_loss(out.reconstruction, x, out.commitment_loss, config.loss);
-  t.optimizer->zero_grad();
-  loss.total.backward();
-  nec::train::optimizer_step(*t.optimizer, t.model->parameters(), config.optimizer.grad_clip, lr);
-  t.model->update_codebooks();
-  const at::Tensor perplexity = out.perplexity.to(torch::kCPU, torch::kFloat64);
-  benchmark::DoNotOptimize(perplexity.data_ptr<double>());
-  return loss.total.item<double>();
+  return nec::tat::synthetic_train_step(*t.model, *t.optimizer, t.inputs, train_config(), ++t.steps);
 }
 
 // The T of a joint count, made by build(T&, joints) on first use and kept for
@@ -202,7 +149,7 @@ void build_trainee(Trainee& t, int64_t joints) {
   const int threads = torch::get_num_threads();
   torch::set_num_threads(1);
   torch::manual_seed(kSeed);
-  t.inputs = synthetic_batch(config.batch_size, config.window_frames, joints, config.model.joint_embedding_dim);
+  t.inputs = nec::tat::synthetic_batch(config.batch_size, config.window_frames, joints, config.model.joint_embedding_dim);
   t.model = Tokenizer(config.model);
   t.optimizer = nec::train::make_adamw(t.model->parameters(), config.optimizer);
   for (const at::Tensor& p : t.model->parameters()) t.parameters += p.numel();
@@ -242,7 +189,7 @@ nec::tat::WindowOptions windows() { return {train_config().window_frames, 16}; }
 void build_clip(Clip& c, int64_t joints) {
   const nec::tat::TatTrainConfig& config = train_config();
   torch::manual_seed(kSeed);
-  const at::Tensor theta = random_features(1, kClipFrames, joints)[0].contiguous();
+  const at::Tensor theta = nec::tat::random_features(1, kClipFrames, joints)[0].contiguous();
   c.features.frame_count = static_cast<int>(kClipFrames);
   c.features.joint_count = static_cast<int>(joints);
   c.features.data.assign(theta.data_ptr<float>(), theta.data_ptr<float>() + theta.numel());

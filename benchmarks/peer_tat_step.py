@@ -284,6 +284,36 @@ class ResidualQuantizer(nn.Module):
         self.register_buffer("ema_counts", torch.ones(r, k))
         self.register_buffer("ema_sums", self.codebooks.clone())
         self.register_buffer("initialized", torch.zeros((), dtype=torch.bool))
+        self.pending = None  # (counts (R, K), sums (R, K, C), rows per layer) since the last update_codebooks()
+
+    @torch.no_grad()
+    def update_codebooks(self):
+        """quantizer.cpp update_codebooks: the EMA step from the collected statistics, then dead-code restarts."""
+        if self.pending is None:
+            return
+        c = self.c
+        size, dim, decay, threshold = c["codebook_size"], c["code_dim"], c["ema_decay"], c["dead_code_threshold"]
+        counts, sums, rows = self.pending
+        for r in range(c["layers"]):
+            if not bool((counts[r].sum() > 0).item()):
+                continue
+            codebook = self.codebooks[r]
+            self.ema_counts[r].mul_(decay).add_(counts[r], alpha=1.0 - decay)
+            self.ema_sums[r].mul_(decay).add_(sums[r], alpha=1.0 - decay)
+            total_count = self.ema_counts[r].sum()
+            smoothed = (self.ema_counts[r] + LAPLACE_EPSILON) / (total_count + size * LAPLACE_EPSILON) * total_count
+            codebook.copy_(self.ema_sums[r] / smoothed.unsqueeze(1))
+            if threshold <= 0:
+                continue
+            dead = (self.ema_counts[r] < threshold).unsqueeze(1)
+            if not bool(dead.any().item()):
+                continue
+            kept = torch.cat(rows[r]) if rows[r] else torch.zeros(0, 2 * dim + 1)
+            fresh = sample_rows(kept[:, :dim], kept[:, 2 * dim], kept[:, dim:2 * dim], size)
+            codebook.copy_(torch.where(dead, fresh, codebook))
+            self.ema_sums[r].copy_(torch.where(dead, fresh * threshold, self.ema_sums[r]))
+            self.ema_counts[r].masked_fill_(dead.squeeze(1), threshold)
+        self.pending = None
 
     def forward(self, latent, mask):
         """latent (N, C), mask (N) bool -> quantized (N, C), codes (N, R), commitment, perplexity (R)."""
@@ -322,21 +352,15 @@ class ResidualQuantizer(nn.Module):
                 usage = counts / kept
                 perplexity.select(0, r).copy_(torch.exp(-(usage * torch.log(usage.clamp_min(1e-10))).sum()))
                 if update:
-                    decay = c["ema_decay"]
+                    # Kept for update_codebooks(): the EMA moves once per optimizer step (quantizer.cpp).
                     sums = torch.zeros(size, c["code_dim"]).index_add_(0, index, residual * weight.unsqueeze(1))
-                    self.ema_counts[r].mul_(decay).add_(counts, alpha=1.0 - decay)
-                    self.ema_sums[r].mul_(decay).add_(sums, alpha=1.0 - decay)
-                    total_count = self.ema_counts[r].sum()
-                    smoothed = (self.ema_counts[r] + LAPLACE_EPSILON) / (total_count + size * LAPLACE_EPSILON) * \
-                        total_count
-                    codebook.copy_(self.ema_sums[r] / smoothed.unsqueeze(1))
-                    threshold = c["dead_code_threshold"]
-                    if threshold > 0:
-                        dead = (self.ema_counts[r] < threshold).unsqueeze(1)
-                        fresh = sample_rows(residual, weight, residual - chosen, size)
-                        codebook.copy_(torch.where(dead, fresh, codebook))
-                        self.ema_sums[r].copy_(torch.where(dead, fresh * threshold, self.ema_sums[r]))
-                        self.ema_counts[r].masked_fill_(dead.squeeze(1), threshold)
+                    if self.pending is None:
+                        self.pending = (torch.zeros_like(self.ema_counts), torch.zeros_like(self.ema_sums),
+                                        [[] for _ in range(layers)])
+                    self.pending[0][r].add_(counts)
+                    self.pending[1][r].add_(sums)
+                    if c["dead_code_threshold"] > 0:
+                        self.pending[2][r].append(torch.cat([residual, residual - chosen, weight.unsqueeze(1)], 1))
                 total += chosen
                 residual -= chosen
             if seed:
@@ -576,6 +600,7 @@ class Trainee:
         if self.c["grad_clip"] > 0:
             torch.nn.utils.clip_grad_norm_(self.model.parameters(), self.c["grad_clip"])
         self.optimizer.step()
+        self.model.quantizer.update_codebooks()
         perplexity.to("cpu", torch.float64).tolist()
         return total.item()
 

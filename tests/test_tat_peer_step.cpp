@@ -1,0 +1,62 @@
+// A golden tokenizer training step: the C++ step on the synthetic batch of benchmarks/peer_tat_step.py gives the
+// losses the Python (PyTorch) peer printed for the same inputs, weights and schedule.
+#include "nec/tat/synthetic.h"
+#include "nec/tat/training.h"
+#include "nec/train/optimizer.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <torch/torch.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+namespace nec {
+namespace {
+
+// configs/tat_cpu.json with joint embeddings as wide as configs/owo_cpu.json's encoder, as the peer reads them.
+tat::TatTrainConfig peer_config() {
+  const std::filesystem::path configs = std::filesystem::path(__FILE__).parent_path().parent_path() / "configs";
+  tat::TatTrainConfig config = tat::read_tat_train_config((configs / "tat_cpu.json").string());
+  std::ifstream owo(configs / "owo_cpu.json");
+  config.model.joint_embedding_dim = nlohmann::json::parse(owo).at("encoder").at("dim").get<int64_t>();
+  config.validate();
+  return config;
+}
+
+// `python3 benchmarks/peer_tat_step.py` (Debian python3-torch 1.13.1): the losses of its first two steps at 22
+// and 100 joints (docs/benchmarks.md). Both sides seed torch with 0, draw the batch, then the weights.
+struct PeerRun {
+  int64_t joints;
+  double losses[2];
+};
+constexpr PeerRun kPeerRuns[] = {{22, {25.232073, 25.203077}}, {100, {25.607801, 25.632816}}};
+constexpr double kTolerance = 2e-6;  // relative: the peer prints 8 significant digits
+
+TEST(TatPeerStep, FirstTwoLossesEqualThePythonPeers) {
+  torch::set_num_threads(1);
+  const tat::TatTrainConfig config = peer_config();
+  double largest = 0.0;
+  for (const PeerRun& peer : kPeerRuns) {
+    torch::manual_seed(0);
+    const tat::SyntheticBatch inputs =
+        tat::synthetic_batch(config.batch_size, config.window_frames, peer.joints, config.model.joint_embedding_dim);
+    tat::Tokenizer model(config.model);
+    auto optimizer = train::make_adamw(model->parameters(), config.optimizer);
+    for (int64_t step = 1; step <= 2; ++step) {
+      const double loss = tat::synthetic_train_step(*model, *optimizer, inputs, config, step);
+      const double expected = peer.losses[step - 1];
+      const double relative = std::abs(loss - expected) / expected;
+      largest = std::max(largest, relative);
+      std::printf("%lld joints, step %lld: C++ %.6f, Python peer %.6f, relative difference %.2g\n",
+                  static_cast<long long>(peer.joints), static_cast<long long>(step), loss, expected, relative);
+      EXPECT_LT(relative, kTolerance) << peer.joints << " joints, step " << step;
+    }
+  }
+  std::printf("largest relative difference: %.2g (tolerance %.1g)\n", largest, kTolerance);
+}
+
+}  // namespace
+}  // namespace nec
