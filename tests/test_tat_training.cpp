@@ -1,0 +1,150 @@
+// TatTrainer: a run saved and resumed takes the steps of one that never stopped, on a decaying learning rate;
+// a resumed run with a later end goes on from the rate it had; configs that differ are refused.
+#include "nec/motion/dataset.h"
+#include "nec/motion/error.h"
+#include "nec/motion/preprocess.h"
+#include "nec/owo/pretrain.h"
+#include "nec/tat/checkpoint.h"
+#include "nec/tat/training.h"
+#include "nec/zoo/creature.h"
+#include "nec/zoo/motion_synthesis.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <torch/torch.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace nec {
+namespace {
+
+// Eight 2-s walks of zoo quadrupeds and bipeds, every clip in the train split.
+DatasetCache walk_cache() {
+  std::vector<CacheEntry> entries;
+  for (int i = 0; i < 8; ++i) {
+    const zoo::BodyPlan plan = i % 2 == 0 ? zoo::BodyPlan::Quadruped : zoo::BodyPlan::Biped;
+    const zoo::Creature creature = zoo::make_creature(plan, 40 + static_cast<uint64_t>(i));
+    zoo::MotionSpec spec;
+    spec.action = zoo::Action::Walk;
+    spec.seconds = 2.0;
+    spec.seed = static_cast<uint64_t>(i);
+    const std::string source = "zoo/c" + std::to_string(i) + "/walk.bvh";
+    CacheEntry entry;
+    entry.prepared = preprocess(Clip{creature.skeleton, zoo::synthesize_motion(creature, spec).motion, {}}, source);
+    entry.source = source;
+    entry.dataset = "zoo";
+    entries.push_back(std::move(entry));
+  }
+  CacheOptions options;
+  options.split.val_fraction = options.split.test_fraction = 0.0;
+  return build_cache(entries, options);
+}
+
+owo::OwoPretrainer frozen_encoder() {
+  torch::manual_seed(3);
+  owo::OwoConfig encoder;
+  encoder.name_dim = 0;
+  encoder.dim = 16;
+  encoder.layers = 1;
+  encoder.heads = 2;
+  encoder.edge_dim = 8;
+  return owo::OwoPretrainer(encoder, owo::PretrainConfig{});
+}
+
+tat::TatTrainConfig decaying_config() {
+  tat::TatTrainConfig config;
+  config.model.joint_embedding_dim = 16;
+  config.model.dim = 16;
+  config.model.heads = 2;
+  config.model.quantizer.layers = 2;
+  config.model.quantizer.codebook_size = 16;
+  config.model.quantizer.code_dim = 16;
+  config.optimizer.learning_rate = 3e-3;
+  config.optimizer.warmup_steps = 2;
+  config.optimizer.final_lr_fraction = 0.1;
+  config.steps = 6;
+  config.batch_size = 4;
+  config.window_frames = 16;
+  config.augment_probability = 0.5;
+  config.seed = 9;
+  return config;
+}
+
+TEST(TatTrainer, AResumedRunTakesTheStepsOfOneThatNeverStopped) {
+  torch::set_num_threads(1);
+  const DatasetCache cache = walk_cache();
+  const tat::TatTrainConfig config = decaying_config();
+  testing::TempDir dir;
+  const std::string checkpoint = dir / "tat";
+
+  tat::TatTrainer straight(config, cache, "walks", frozen_encoder(), nullptr, torch::kCPU);
+  std::vector<tat::LossTerms> terms;
+  for (int64_t step = 1; step <= 6; ++step) {
+    terms.push_back(straight.step(step));
+    if (step == 3) straight.save(checkpoint, step);
+  }
+  // The rate decays: every step after warm-up runs slower than the one before.
+  for (int64_t step = 3; step <= 6; ++step) EXPECT_LT(terms[step - 1].at("lr"), terms[step - 2].at("lr")) << step;
+
+  tat::TatTrainer resumed(config, cache, "walks", frozen_encoder(), nullptr, torch::kCPU);
+  ASSERT_EQ(resumed.resume(checkpoint), 3);
+  double largest = 0.0;
+  for (int64_t step = 4; step <= 6; ++step) {
+    const tat::LossTerms again = resumed.step(step);
+    for (const char* key : {"loss", "rotation", "root", "position", "commitment", "lr"}) {
+      const double difference = std::abs(again.at(key) - terms[step - 1].at(key));
+      largest = std::max(largest, difference / std::max(1.0, std::abs(terms[step - 1].at(key))));
+      EXPECT_LT(difference, 1e-6 * std::max(1.0, std::abs(terms[step - 1].at(key)))) << key << " at step " << step;
+    }
+  }
+  double parameters = 0.0;
+  auto resumed_tensors = resumed.tokenizer()->named_parameters();
+  for (const auto& item : straight.tokenizer()->named_parameters()) {
+    parameters = std::max(parameters, (item.value() - resumed_tensors[item.key()]).abs().max().item<double>());
+  }
+  std::printf("steps 4-6 resumed vs straight: largest relative term difference %.3g, parameter difference %.3g\n",
+              largest, parameters);
+  EXPECT_LT(parameters, 1e-6);
+}
+
+TEST(TatTrainer, ALaterEndGoesOnFromTheRateItHadAndOtherConfigsAreRefused) {
+  torch::set_num_threads(1);
+  const DatasetCache cache = walk_cache();
+  const tat::TatTrainConfig config = decaying_config();
+  testing::TempDir dir;
+  const std::string checkpoint = dir / "tat";
+  tat::TatTrainer first(config, cache, "walks", frozen_encoder(), nullptr, torch::kCPU);
+  double rate_at_4 = 0.0;
+  for (int64_t step = 1; step <= 4; ++step) rate_at_4 = first.step(step).at("lr");
+  first.save(checkpoint, 4);
+
+  tat::TatTrainConfig longer = config;
+  longer.steps = 20;  // --resume --steps 20
+  tat::TatTrainer resumed(longer, cache, "walks", frozen_encoder(), nullptr, torch::kCPU);
+  ASSERT_EQ(resumed.resume(checkpoint), 4);
+  const double rate_at_5 = resumed.step(5).at("lr");
+  std::printf("rate at step 4 %.6g, at step 5 after moving the end from 6 to 20: %.6g (a fresh 20-step run: %.6g)\n",
+              rate_at_4, rate_at_5, train::LearningRateSchedule(longer.optimizer, 20).at(5));
+  EXPECT_LT(rate_at_5, rate_at_4);
+  EXPECT_GT(rate_at_5, 0.95 * rate_at_4);  // a 16-step cosine from the rate at step 4 moves little in one step
+  EXPECT_NEAR(resumed.schedule().at(20), config.optimizer.learning_rate * config.optimizer.final_lr_fraction, 1e-12);
+
+  tat::TatTrainConfig changed = config;
+  changed.optimizer.weight_decay = 0.5;
+  tat::TatTrainer other(changed, cache, "walks", frozen_encoder(), nullptr, torch::kCPU);
+  try {
+    other.resume(checkpoint);
+    FAIL() << "resumed with another weight decay";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'optimizer.weight_decay' (checkpoint 0.0, now 0.5)"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(tat::TatTrainer(config, cache, "walks", frozen_encoder(), nullptr, torch::kCPU).resume(dir / "none"),
+               InputError);
+}
+
+}  // namespace
+}  // namespace nec
