@@ -205,6 +205,9 @@ TEST(OwoTrainingConfig, FieldsDefaultsErrorsAndRoundTrip) {
   EXPECT_NE(input_error(R"({"names": false})").find("encoder.name_dim must be 0 when names is false"),
             std::string::npos);
   EXPECT_NE(input_error("{\"steps\": 10,}").find("cfg.json: not valid JSON"), std::string::npos);
+  // A note for people is allowed in every object.
+  EXPECT_EQ(input_error(R"({"comment": "CPU run", "optimizer": {"comment": "as the paper", "learning_rate": 1e-3}})"),
+            "(no error)");
 
   owo::OwoTrainingConfig config;
   config.encoder.dim = 48;

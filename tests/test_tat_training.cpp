@@ -11,6 +11,7 @@
 #include "test_support.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <torch/torch.h>
 
 #include <cmath>
@@ -144,6 +145,21 @@ TEST(TatTrainer, ALaterEndGoesOnFromTheRateItHadAndOtherConfigsAreRefused) {
   }
   EXPECT_THROW(tat::TatTrainer(config, cache, "walks", frozen_encoder(), nullptr, torch::kCPU).resume(dir / "none"),
                InputError);
+}
+
+TEST(TatTrainConfig, NotesAreAllowedEverywhereAndUnknownFieldsAreNamed) {
+  const nlohmann::json noted = {{"comment", "laptop"},
+                                {"model", {{"comment", "small"}, {"quantizer", {{"comment", "4 x 256"}}}}},
+                                {"optimizer", {{"comment", "as OwO"}, {"learning_rate", 1e-3}}}};
+  EXPECT_EQ(tat::tat_train_config_from_json(noted, "t.json").optimizer.learning_rate, 1e-3);
+  try {
+    tat::tat_train_config_from_json({{"optimizer", {{"lr", 1e-3}}}}, "t.json");
+    FAIL() << "accepted optimizer.lr";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("t.json: field 'optimizer.lr' is not a known field (known here: "),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

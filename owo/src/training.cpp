@@ -49,7 +49,7 @@ class ConfigFields {
     std::string known_list;
     for (const char* k : known) known_list += (known_list.empty() ? "" : ", ") + std::string(k);
     for (auto it = object_.begin(); it != object_.end(); ++it) {
-      bool found = false;
+      bool found = it.key() == "comment";  // a note for people, allowed in every object of every config
       for (const char* k : known) found = found || it.key() == k;
       if (!found) fail(prefix_ + it.key(), "is not a known field (known here: " + known_list + ")");
     }

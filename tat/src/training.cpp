@@ -39,8 +39,13 @@ std::vector<std::string> term_names(int64_t layers) {
 
 void reject_unknown(const json& object, const std::set<std::string>& known, const train::JsonFields& fields,
                     const std::string& where) {
+  std::string known_list;
+  for (const std::string& key : known) known_list += (known_list.empty() ? "" : ", ") + key;
   for (const auto& item : object.items()) {
-    if (!known.count(item.key())) fields.fail("unknown field '" + where + item.key() + "'");
+    // "comment": a note for people, allowed in every object of every config.
+    if (!known.count(item.key()) && item.key() != "comment") {
+      fields.fail("field '" + where + item.key() + "' is not a known field (known here: " + known_list + ")");
+    }
   }
 }
 
@@ -96,7 +101,7 @@ TatTrainConfig tat_train_config_from_json(const json& object, const std::string&
   if (!object.is_object()) fields.fail("a training config must be a JSON object");
   reject_unknown(object,
                  {"model", "loss", "optimizer", "steps", "batch_size", "window_frames", "augment_probability", "joint_buckets", "max_joint_frames",
-                  "log_every", "validate_every", "validation_batches", "checkpoint_every", "seed", "comment"},
+                  "log_every", "validate_every", "validation_batches", "checkpoint_every", "seed"},
                  fields, "");
   TatTrainConfig c;
   if (object.contains("model")) {
