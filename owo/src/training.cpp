@@ -361,19 +361,23 @@ SkeletonSet split_as_trained(SkeletonSet set, const std::vector<std::string>& tr
   return out;
 }
 
+// The OwO view of a training state read from `path`.
+OwoTrainingRecord record_of(const train::TrainingState& state, const std::string& path) {
+  const JsonFields fields(path, "the training state is damaged; train again into a new --out");
+  OwoTrainingRecord record;
+  record.step = state.step;
+  record.config = config_from_json(state.config, path);
+  record.schedule = state.schedule;
+  record.data = string_list(fields, state.data, "caches");
+  record.train_skeletons = string_list(fields, state.data, "train_skeletons");
+  record.held_out_skeletons = string_list(fields, state.data, "held_out_skeletons");
+  return record;
+}
+
 std::optional<OwoTrainingRecord> read_owo_training_record(const std::string& dir) {
   const std::optional<train::TrainingState> state = train::read_training_state(dir, "owo");
   if (!state) return std::nullopt;
-  const std::string path = (fs::path(dir) / train::kTrainingStateFile).string();
-  const JsonFields fields(path, "the training state is damaged; train again into a new --out");
-  OwoTrainingRecord record;
-  record.step = state->step;
-  record.config = config_from_json(state->config, path);
-  record.schedule = state->schedule;
-  record.data = string_list(fields, state->data, "caches");
-  record.train_skeletons = string_list(fields, state->data, "train_skeletons");
-  record.held_out_skeletons = string_list(fields, state->data, "held_out_skeletons");
-  return record;
+  return record_of(*state, (fs::path(dir) / train::kTrainingStateFile).string());
 }
 
 OwoTrainer::OwoTrainer(const OwoTrainingConfig& config, SkeletonSet skeletons, const text::WordVectors* vectors,
@@ -547,8 +551,8 @@ int64_t OwoTrainer::resume(const std::string& dir) {
   LoadedOwoCheckpoint loaded = load_owo_checkpoint(dir);
   const train::TrainingState state = train::resumable_state(dir, "owo", loaded.info.training_step);
   train::check_resumable(state, config_to_json(config_), kScheduleFields, record_path);
-  const std::optional<OwoTrainingRecord> record = read_owo_training_record(dir);
-  std::set<std::string> then(record->train_skeletons.begin(), record->train_skeletons.end()), now;
+  const OwoTrainingRecord record = record_of(state, record_path);
+  std::set<std::string> then(record.train_skeletons.begin(), record.train_skeletons.end()), now;
   for (const PretrainSkeleton& s : skeletons_.train) now.insert(s.hash);
   if (then != now) {
     int added = 0, removed = 0;
@@ -562,9 +566,9 @@ int64_t OwoTrainer::resume(const std::string& dir) {
 
   train::copy_module_tensors(*loaded.model, *model_);
   train::load_optimizer_state(dir, *optimizer_, device_);
-  schedule_ = train::LearningRateSchedule::resumed(config_.optimizer, record->schedule, record->step, config_.steps,
+  schedule_ = train::LearningRateSchedule::resumed(config_.optimizer, record.schedule, record.step, config_.steps,
                                                    record_path);
-  return record->step;
+  return record.step;
 }
 
 }  // namespace nec::owo

@@ -285,6 +285,7 @@ LossTerms TatTrainer::step_on(const Batch& batch, int64_t step) {
   // seed and the step alone: a run is repeatable, and a resumed run takes the
   // steps of one that never stopped.
   torch::manual_seed(static_cast<uint64_t>(config_.seed) * 1000003u + static_cast<uint64_t>(step - 1));
+  const double lr = schedule_.at(step);
   const double share = batch.global_size > 0 ? static_cast<double>(batch.size) / batch.global_size : 1.0;
   tokenizer_->train();
   optimizer_->zero_grad();
@@ -294,7 +295,7 @@ LossTerms TatTrainer::step_on(const Batch& batch, int64_t step) {
     terms = backward_in_parts(tokenizer_, in.batch, in.embeddings, config_.loss, config_.max_joint_frames, share);
   }
   const train::OptimizerStep taken = train::optimizer_step(*optimizer_, tokenizer_->parameters(), config_.optimizer.grad_clip,
-                                                           schedule_.at(step), ranks_);
+                                                           lr, ranks_);
   tokenizer_->update_codebooks();
   if (ranks_ != nullptr) {
     // Every rank reports the whole batch's terms; each term is named by every rank (the same model).
@@ -309,7 +310,7 @@ LossTerms TatTrainer::step_on(const Batch& batch, int64_t step) {
     for (size_t i = 0; i < names.size(); ++i) terms[names[i]] = summed[0][static_cast<int64_t>(i)].item<double>();
   }
   terms["grad_norm"] = taken.grad_norm;
-  terms["lr"] = schedule_.at(step);
+  terms["lr"] = lr;
   return terms;
 }
 
