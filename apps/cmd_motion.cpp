@@ -132,18 +132,14 @@ int run_augment(int argc, char** argv) {
   const std::string kind_name = cli.value("--kind");
   SplitMix64 rng(static_cast<uint64_t>(cli.integer("--seed")));
   AugmentKind kind;
-  if (kind_name == "rest") {
-    kind = AugmentKind::RestPose;
-  } else if (kind_name == "length") {
-    kind = AugmentKind::BoneLength;
-  } else if (kind_name == "remove") {
-    kind = AugmentKind::JointRemoval;
-  } else if (kind_name == "subdivide") {
-    kind = AugmentKind::Subdivision;
-  } else if (kind_name == "joints") {
+  if (kind_name == "joints") {
     kind = rng.chance(0.5) ? AugmentKind::JointRemoval : AugmentKind::Subdivision;
   } else {
-    throw UsageError("--kind must be rest, length, joints, remove or subdivide, got '" + kind_name + "'");
+    try {
+      kind = augment_kind_from_string(kind_name);
+    } catch (const std::invalid_argument&) {
+      throw UsageError("--kind must be rest, length, joints, remove or subdivide, got '" + kind_name + "'");
+    }
   }
   const std::string path = cli.positional_value("IN.bvh");
   const Clip clip = read_bvh(path);

@@ -6,6 +6,7 @@
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/owo/training.h"
+#include "nec/train/config_fields.h"
 
 #include <fmt/format.h>
 #include <torch/torch.h>
@@ -16,21 +17,6 @@
 #include <optional>
 
 namespace nec::app {
-namespace {
-
-train::LossTerms step_terms(const owo::PretrainLosses& l) {
-  train::LossTerms terms{{"total", l.total}};
-  if (l.offset) terms.emplace_back("offset", *l.offset);
-  if (l.pair_offset) terms.emplace_back("pair", *l.pair_offset);
-  if (l.lca) terms.emplace_back("lca", *l.lca);
-  if (l.name) terms.emplace_back("name", *l.name);
-  if (l.lca_accuracy) terms.emplace_back("lca_acc", *l.lca_accuracy);
-  if (l.grad_norm) terms.emplace_back("grad", *l.grad_norm);
-  return terms;
-}
-
-}  // namespace
-
 int run_train_owo(int argc, char** argv) {
   CommandLine cli("nec train owo",
                   "Pretrain the OwO skeleton graph encoder (NECromancer appendix C.2-C.3) on every distinct skeleton\n"
@@ -50,6 +36,8 @@ int run_train_owo(int argc, char** argv) {
   cli.option("--glove", "FILE", text::default_word_vectors_path(), "word vectors for joint names (`nec text import-glove`)");
   cli.flag("--no-names", "train without joint names (sets names false and encoder.name_dim 0)");
   declare_training_options(cli);
+  cli.epilogue("fields of --config (every one optional; the default after =):\n" +
+               train::describe_config(owo::OwoTrainingConfig{}));
   cli.example("nec train owo --config configs/owo_cpu.json --data cache/ --out runs/owo");
   cli.example("nec train owo --config configs/owo_cpu.json --data cache/ --out runs/owo --resume --steps 6000");
   cli.example("nec train owo --config configs/owo_cpu.json --data cache/ --out runs/owo --nproc 2");
@@ -105,39 +93,9 @@ int run_train_owo(int argc, char** argv) {
                run.ranks ? run.ranks->world_size() : 1, torch::get_num_threads());
     if (run.resume) fmt::print("resumed  {} at step {}\n", out, start_step);
   }
-  if (start_step >= config.steps) {
-    if (run.is_main()) {
-      fmt::print("the checkpoint is at step {} and the run ends at step {}: nothing to do (raise --steps to go on)\n",
-                 start_step, config.steps);
-    }
-    return 0;
-  }
-  std::fflush(stdout);
-
-  train::TrainingSchedule schedule;
-  schedule.total_steps = config.steps;
-  schedule.log_every = config.log_every;
-  schedule.validate_every = trainer.skeletons().held_out.empty() ? 0 : config.validate_every;
-  schedule.checkpoint_every = config.checkpoint_every;
-  train::TrainingHooks hooks;
-  hooks.step = [&](int64_t step) { return step_terms(trainer.step(step)); };
-  hooks.validate = [&](int64_t) {
-    const owo::ScoreSummary held_out = owo::summarize(trainer.score_held_out());
-    return train::LossTerms{{"held_out_lca_acc", held_out.lca_accuracy},
-                            {"offset_pct", held_out.offset_percent},
-                            {"rebuilt", held_out.rebuild_rate},
-                            {"decoded", held_out.decode_rate}};
-  };
-  hooks.checkpoint = [&](int64_t step) { trainer.save(out, step, data); };
-
-  const auto start = std::chrono::steady_clock::now();
-  const int code = run_training_steps(run, schedule, start_step, out, hooks);
-  if (code != 0 || !run.is_main()) return code;
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  fmt::print("trained steps {}-{} in {} ({:.3g} steps/s); checkpoint {}\nevaluate: nec eval owo --model {} --data {}\n",
-             start_step + 1, config.steps, train::format_duration(seconds),
-             (config.steps - start_step) / std::max(seconds, 1e-9), out, out, cli.value("--data"));
-  return 0;
+  const int code = run_training_steps(run, trainer.loop_schedule(), start_step, out, trainer.hooks(out, data));
+  if (code == 0 && run.is_main()) fmt::print("evaluate: nec eval owo --model {} --data {}\n", out, cli.value("--data"));
+  return code;
 }
 
 }  // namespace nec::app

@@ -7,6 +7,7 @@
 #include "nec/owo/checkpoint.h"
 #include "nec/tat/checkpoint.h"
 #include "nec/tat/training.h"
+#include "nec/train/config_fields.h"
 
 #include <fmt/format.h>
 #include <torch/torch.h>
@@ -31,6 +32,8 @@ int run_train_tat(int argc, char** argv) {
   cli.option("--kind", "KIND", "", "override model.kind: nec-rvq, nec-vq or zero-pad-rvq");
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
   declare_training_options(cli);
+  cli.epilogue("fields of --config (every one optional; the default after =):\n" +
+               train::describe_config(tat::TatTrainConfig{}));
   cli.example("nec train tat --config configs/tat_cpu.json --data cache/ --owo runs/owo --out runs/tat");
   cli.example("nec train tat --config configs/tat_cpu.json --data cache/ --out runs/tat --resume --steps 3000");
   cli.example("nec train tat --config configs/tat_cpu.json --data cache/ --owo runs/owo --out runs/tat --nproc 2");
@@ -75,39 +78,13 @@ int run_train_tat(int argc, char** argv) {
     fmt::print("training {} ({} parameters) on {} ({} train clips); steps {}-{} of {} x {} frames on {}, {} "
                "process(es) x {} threads\n",
                tat::to_string(config.model.kind), trainer.parameter_count(), cli.value("--data"),
-               trainer.train_clip_count(), start_step + 1, config.steps, config.batch_size, config.window_frames,
+               trainer.train_clip_count(), start_step + 1, config.steps, config.batch_size, config.data.window_frames,
                run.device.str(), run.ranks ? run.ranks->world_size() : 1, torch::get_num_threads());
     std::fflush(stdout);
   }
 
-  train::TrainingSchedule schedule;
-  schedule.total_steps = config.steps;
-  schedule.log_every = config.log_every;
-  schedule.validate_every = trainer.has_validation() ? config.validate_every : 0;
-  schedule.checkpoint_every = config.checkpoint_every;
-  train::TrainingHooks hooks;
-  hooks.step = [&](int64_t step) {
-    const tat::LossTerms terms = trainer.step(step);
-    train::LossTerms out;
-    for (const char* key : {"loss", "rotation", "root", "position", "velocity", "commitment"}) {
-      out.emplace_back(key, terms.at(key));
-    }
-    for (int64_t r = 0; r < config.model.quantizer.layers; ++r) {
-      const std::string key = "perplexity" + std::to_string(r);
-      if (terms.count(key)) out.emplace_back("ppl" + std::to_string(r), terms.at(key));
-    }
-    out.emplace_back("lr", terms.at("lr"));
-    return out;
-  };
-  hooks.validate = [&](int64_t) {
-    const std::optional<tat::ReconstructionMetrics> metrics = trainer.validate();
-    return train::LossTerms{{"val_mpjpe", metrics->mpjpe()},
-                            {"val_mpjpe_no_trans", metrics->mpjpe_no_translation()},
-                            {"val_geodesic_deg", metrics->geodesic_degrees()}};
-  };
-  hooks.checkpoint = [&](int64_t step) { trainer.save(out_dir, step); };
-  const int code = run_training_steps(run, schedule, start_step, out_dir, hooks);
-  if (code == 0 && run.is_main()) fmt::print("wrote {} (step {})\n", out_dir, std::max(start_step, config.steps));
+  const int code = run_training_steps(run, trainer.loop_schedule(), start_step, out_dir, trainer.hooks(out_dir));
+  if (code == 0 && run.is_main()) fmt::print("evaluate: nec eval recon --model {} --data {}\n", out_dir, cli.value("--data"));
   return code;
 }
 

@@ -33,6 +33,8 @@ void CommandLine::flag(std::string name, std::string help) {
 
 void CommandLine::example(std::string line) { examples_.push_back(std::move(line)); }
 
+void CommandLine::epilogue(std::string text) { epilogue_ = std::move(text); }
+
 const CommandLine::Option* CommandLine::find(const std::string& name) const {
   for (const Option& o : options_) {
     if (o.name == name) return &o;
@@ -121,6 +123,7 @@ std::string CommandLine::usage() const {
     out << "\nexamples:\n";
     for (const std::string& e : examples_) out << "  " << e << "\n";
   }
+  if (!epilogue_.empty()) out << "\n" << epilogue_;
   return out.str();
 }
 

@@ -35,6 +35,8 @@ class CommandLine {
               bool required = false);
   void flag(std::string name, std::string help);
   void example(std::string line);
+  // Text printed last in --help, e.g. the fields of a config file.
+  void epilogue(std::string text);
 
   // Returns false when --help was asked for (usage is printed to stdout).
   bool parse(int argc, char** argv);
@@ -68,6 +70,7 @@ class CommandLine {
   std::vector<Option> options_;
   std::vector<Positional> positional_specs_;
   std::vector<std::string> examples_;
+  std::string epilogue_;
   std::map<std::string, std::string> values_;
   std::map<std::string, bool> flags_;
   std::map<std::string, std::vector<std::string>> positional_values_;

@@ -11,6 +11,8 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -71,6 +73,16 @@ TrainingRun start_training_run(const CommandLine& cli, const std::string& out_di
 
 int run_training_steps(const TrainingRun& run, const train::TrainingSchedule& schedule, int64_t start_step,
                        const std::string& out_dir, train::TrainingHooks hooks) {
+  if (start_step >= schedule.total_steps) {
+    if (run.is_main()) {
+      fmt::print("the checkpoint in {} is at step {} and the run ends at step {}: nothing to do (raise --steps to go "
+                 "on)\n",
+                 out_dir, start_step, schedule.total_steps);
+    }
+    return 0;
+  }
+  std::fflush(stdout);
+  const auto start = std::chrono::steady_clock::now();
   const train::InterruptSignals signals;
   hooks.interrupted = [&] { return run.ranks ? run.ranks->any(signals.received()) : signals.received(); };
   if (!run.is_main()) {
@@ -81,6 +93,11 @@ int run_training_steps(const TrainingRun& run, const train::TrainingSchedule& sc
   const train::TrainingOutcome outcome = train::run_training(schedule, start_step, out_dir, hooks, progress);
   if ((outcome.stopped || outcome.interrupted) && run.is_main()) {
     fmt::print(stderr, "nec: {}{}\n", outcome.stopped ? "error: " : "", outcome.message);
+  }
+  if (outcome.exit_code() == 0 && run.is_main()) {
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    fmt::print("trained steps {}-{} in {} ({:.3g} steps/s); checkpoint {}\n", start_step + 1, schedule.total_steps,
+               train::format_duration(seconds), (schedule.total_steps - start_step) / std::max(seconds, 1e-9), out_dir);
   }
   return outcome.exit_code();
 }

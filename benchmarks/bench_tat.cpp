@@ -149,7 +149,7 @@ void build_trainee(Trainee& t, int64_t joints) {
   const int threads = torch::get_num_threads();
   torch::set_num_threads(1);
   torch::manual_seed(kSeed);
-  t.inputs = nec::tat::synthetic_batch(config.batch_size, config.window_frames, joints, config.model.joint_embedding_dim);
+  t.inputs = nec::tat::synthetic_batch(config.batch_size, config.data.window_frames, joints, config.model.joint_embedding_dim);
   t.model = Tokenizer(config.model);
   t.optimizer = nec::train::make_adamw(t.model->parameters(), config.optimizer);
   for (const at::Tensor& p : t.model->parameters()) t.parameters += p.numel();
@@ -166,7 +166,7 @@ void BM_TatTrainStep(benchmark::State& state) {
   Trainee& t = trainee(joints);
   for (auto _ : state) benchmark::DoNotOptimize(train_step(t));
   const nec::tat::TatTrainConfig& config = train_config();
-  state.SetItemsProcessed(state.iterations() * config.batch_size * config.window_frames);  // frames
+  state.SetItemsProcessed(state.iterations() * config.batch_size * config.data.window_frames);  // frames
   state.counters["parameters"] = static_cast<double>(t.parameters);
   state.counters["loss_step0"] = t.first_losses.at(0);
   state.counters["loss_step1"] = t.first_losses.at(1);
@@ -184,7 +184,7 @@ struct Clip {
   at::Tensor codes;          // (S, R) of features
 };
 
-nec::tat::WindowOptions windows() { return {train_config().window_frames, 16}; }
+nec::tat::WindowOptions windows() { return {train_config().data.window_frames, 16}; }
 
 void build_clip(Clip& c, int64_t joints) {
   const nec::tat::TatTrainConfig& config = train_config();
@@ -282,7 +282,7 @@ int main(int argc, char** argv) {
   try {
     const nec::tat::TatTrainConfig& config = train_config();
     std::fprintf(stderr, "bench_tat: %s, batch %lld x %lld frames\n", config.model.to_string().c_str(),
-                 static_cast<long long>(config.batch_size), static_cast<long long>(config.window_frames));
+                 static_cast<long long>(config.batch_size), static_cast<long long>(config.data.window_frames));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_tat: %s\n", e.what());
     return 1;

@@ -81,7 +81,7 @@ def read_config(configs):
         "grad_clip": optimizer.get("grad_clip", 1.0),
         "steps": raw.get("steps", 4000),
         "batch_size": raw.get("batch_size", 32),
-        "window_frames": raw.get("window_frames", 64),
+        "window_frames": raw.get("data", {}).get("window_frames", 64),
     }
 
 

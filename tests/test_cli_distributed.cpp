@@ -33,7 +33,7 @@ constexpr const char* kOwoConfig = R"({
 constexpr const char* kTatConfig = R"({"model": {"kind": "nec-rvq", "dim": 16, "blocks": 2, "attention_layers": 1,
   "heads": 2, "quantizer": {"layers": 2, "codebook_size": 16, "code_dim": 16}},
   "optimizer": {"learning_rate": 0.003, "final_lr_fraction": 1.0, "warmup_steps": 0},
-  "steps": 5, "batch_size": 4, "window_frames": 16, "augment_probability": 0.0, "joint_buckets": 0,
+  "data": {"window_frames": 16, "joint_buckets": 0, "augment": {"probability": 0.0}}, "steps": 5, "batch_size": 4,
   "log_every": 1, "validate_every": 0, "checkpoint_every": 0, "seed": 1})";
 
 class CliDistributed : public testing::SharedFolderTest {

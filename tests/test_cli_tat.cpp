@@ -36,7 +36,7 @@ std::string tat_config(double learning_rate = 3e-3) {
   "quantizer": {"layers": 2, "codebook_size": 16, "code_dim": 16}},
   "optimizer": {"learning_rate": )" + std::to_string(learning_rate) + R"(, "final_lr_fraction": 0.0, "warmup_steps": 2},
   "steps": 6,
-  "batch_size": 4, "window_frames": 16, "log_every": 2, "validate_every": 3, "validation_batches": 1,
+  "batch_size": 4, "data": {"window_frames": 16}, "log_every": 2, "validate_every": 3, "validation_batches": 1,
   "checkpoint_every": 3, "seed": 1})";
 }
 

@@ -73,6 +73,18 @@ TEST_F(CliTrain, DispatchByModel) {
   const CommandResult help = run_nec("train owo --help");
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_TRUE(contains(help.output, "--threads N") && contains(help.output, "(default: cpu)")) << help.output;
+  // The config's fields, with their defaults, from the config's one field list.
+  for (const char* field : {"fields of --config", "encoder.graph.position_frequencies = 4", "data.augment.probability = 0.8",
+                            "optimizer.learning_rate = 0.001", "steps = 2000"}) {
+    EXPECT_TRUE(contains(help.output, field)) << field << "\n" << help.output;
+  }
+  const CommandResult tat_help = run_nec("train tat --help");
+  EXPECT_EQ(tat_help.exit_code, 0);
+  for (const char* field : {"model.kind = \"nec-rvq\"", "(nec-rvq, nec-vq, zero-pad-rvq)", "data.window_frames = 64",
+                            "data.augment.kinds = [\"rest\",\"length\",\"remove\",\"subdivide\"]",
+                            "optimizer.learning_rate = 0.0002"}) {
+    EXPECT_TRUE(contains(tat_help.output, field)) << field << "\n" << tat_help.output;
+  }
   const CommandResult eval = run_nec("eval frob");
   EXPECT_EQ(eval.exit_code, 2);
   EXPECT_TRUE(contains(eval.output, "unknown evaluation 'frob' (known: owo")) << eval.output;

@@ -7,6 +7,7 @@
 #include "nec/owo/graph.h"
 #include "nec/owo/skeleton_set.h"
 #include "nec/owo/training.h"
+#include "nec/train/config_fields.h"
 #include "nec/zoo/creature.h"
 #include "test_support.h"
 
@@ -232,6 +233,8 @@ TEST(OwoTrainingConfig, FieldsDefaultsErrorsAndRoundTrip) {
     const std::string path = (configs / name).string();
     EXPECT_NO_THROW(owo::parse_owo_training_config(read_file(path), path)) << path;
   }
+  EXPECT_EQ(train::fields_that_may_change<owo::OwoTrainingConfig>(),
+            (std::set<std::string>{"steps", "log_every", "validate_every", "checkpoint_every"}));
 }
 
 owo::OwoTrainingConfig tiny_training_config() {

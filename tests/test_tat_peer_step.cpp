@@ -42,7 +42,7 @@ TEST(TatPeerStep, FirstTwoLossesEqualThePythonPeers) {
   for (const PeerRun& peer : kPeerRuns) {
     torch::manual_seed(0);
     const tat::SyntheticBatch inputs =
-        tat::synthetic_batch(config.batch_size, config.window_frames, peer.joints, config.model.joint_embedding_dim);
+        tat::synthetic_batch(config.batch_size, config.data.window_frames, peer.joints, config.model.joint_embedding_dim);
     tat::Tokenizer model(config.model);
     auto optimizer = train::make_adamw(model->parameters(), config.optimizer);
     for (int64_t step = 1; step <= 2; ++step) {

@@ -2,10 +2,12 @@
 // a resumed run with a later end goes on from the rate it had; configs that differ are refused.
 #include "nec/motion/dataset.h"
 #include "nec/motion/error.h"
+#include "nec/motion/files.h"
 #include "nec/motion/preprocess.h"
 #include "nec/owo/pretrain.h"
 #include "nec/tat/checkpoint.h"
 #include "nec/tat/training.h"
+#include "nec/train/config_fields.h"
 #include "nec/zoo/creature.h"
 #include "nec/zoo/motion_synthesis.h"
 #include "test_support.h"
@@ -16,6 +18,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -68,8 +72,8 @@ tat::TatTrainConfig decaying_config() {
   config.optimizer.final_lr_fraction = 0.1;
   config.steps = 6;
   config.batch_size = 4;
-  config.window_frames = 16;
-  config.augment_probability = 0.5;
+  config.data.window_frames = 16;
+  config.data.augment.probability = 0.5;
   config.seed = 9;
   return config;
 }
@@ -159,6 +163,27 @@ TEST(TatTrainConfig, NotesAreAllowedEverywhereAndUnknownFieldsAreNamed) {
     EXPECT_NE(std::string(e.what()).find("t.json: field 'optimizer.lr' is not a known field (known here: "),
               std::string::npos)
         << e.what();
+  }
+}
+
+TEST(TatTrainConfig, OnlyTheCadenceMayChangeOnResume) {
+  EXPECT_EQ(train::fields_that_may_change<tat::TatTrainConfig>(),
+            (std::set<std::string>{"steps", "log_every", "validate_every", "checkpoint_every"}));
+}
+
+TEST(TatTrainConfig, TheShippedConfigsReadAndWriteBackTheirOwnValues) {
+  for (const char* name : {"tat_cpu.json", "tat_gpu.json"}) {
+    const std::string path = (std::filesystem::path(__FILE__).parent_path().parent_path() / "configs" / name).string();
+    const nlohmann::json file = nlohmann::json::parse(read_file(path));
+    const tat::TatTrainConfig config = tat::read_tat_train_config(path);
+    const nlohmann::json written = train::write_config(config);
+    // Every value the file gives comes back unchanged (comments aside).
+    const nlohmann::json given = file.flatten();
+    for (auto it = given.begin(); it != given.end(); ++it) {
+      if (it.key().find("comment") != std::string::npos) continue;
+      EXPECT_EQ(written.at(nlohmann::json::json_pointer(it.key())), it.value()) << name << " " << it.key();
+    }
+    EXPECT_EQ(train::write_config(tat::tat_train_config_from_json(written, path)), written) << name;
   }
 }
 

@@ -282,6 +282,23 @@ Clip subdivide_bones(const Clip& clip, SplitMix64& rng, double fraction) {
   return out;
 }
 
+std::string to_string(AugmentKind kind) {
+  switch (kind) {
+    case AugmentKind::RestPose: return "rest";
+    case AugmentKind::BoneLength: return "length";
+    case AugmentKind::JointRemoval: return "remove";
+    case AugmentKind::Subdivision: return "subdivide";
+  }
+  throw std::invalid_argument("to_string: unknown AugmentKind");
+}
+
+AugmentKind augment_kind_from_string(const std::string& name) {
+  for (AugmentKind kind : {AugmentKind::RestPose, AugmentKind::BoneLength, AugmentKind::JointRemoval, AugmentKind::Subdivision}) {
+    if (to_string(kind) == name) return kind;
+  }
+  throw std::invalid_argument("unknown augmentation '" + name + "' (known: rest, length, remove, subdivide)");
+}
+
 Clip augment(const Clip& clip, AugmentKind kind, const std::vector<std::string>& canonical_names, SplitMix64& rng) {
   switch (kind) {
     case AugmentKind::RestPose:

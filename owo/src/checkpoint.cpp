@@ -2,6 +2,7 @@
 #include "nec/owo/checkpoint.h"
 
 #include "nec/train/checkpoint_io.h"
+#include "nec/train/config_fields.h"
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
@@ -30,72 +31,6 @@ constexpr const char* kConfigFile = "config.json";
 constexpr const char* kTensorFile = "tensors.pt";
 constexpr const char* kTrainHint = "run `nec train owo` to make one";
 
-json to_json(const OwoConfig& c) {
-  return {{"graph",
-           {{"normalize_scale", c.graph.normalize_scale},
-            {"position_frequencies", c.graph.position_frequencies},
-            {"depth_scale", c.graph.depth_scale},
-            {"children_scale", c.graph.children_scale},
-            {"max_tree_distance", c.graph.max_tree_distance}}},
-          {"name_dim", c.name_dim},
-          {"dim", c.dim},
-          {"layers", c.layers},
-          {"heads", c.heads},
-          {"edge_dim", c.edge_dim},
-          {"ffn_mult", c.ffn_mult},
-          {"leaky_slope", c.leaky_slope},
-          {"tree_edges_only", c.tree_edges_only}};
-}
-
-json to_json(const PretrainConfig& c) {
-  return {{"offset_loss", c.offset_loss},
-          {"pair_offset_loss", c.pair_offset_loss},
-          {"lca_loss", c.lca_loss},
-          {"name_loss", c.name_loss},
-          {"offset_weight", c.offset_weight},
-          {"pair_offset_weight", c.pair_offset_weight},
-          {"lca_weight", c.lca_weight},
-          {"name_weight", c.name_weight},
-          {"pairs_per_skeleton", c.pairs_per_skeleton},
-          {"temperature", c.temperature}};
-}
-
-OwoConfig read_encoder_config(const JsonFields& reader, const json& root) {
-  const json& e = reader.object(root, "encoder", "");
-  const json& g = reader.object(e, "graph", "encoder.");
-  OwoConfig c;
-  reader.read(g, "normalize_scale", "encoder.graph.", c.graph.normalize_scale);
-  reader.read(g, "position_frequencies", "encoder.graph.", c.graph.position_frequencies);
-  reader.read(g, "depth_scale", "encoder.graph.", c.graph.depth_scale);
-  reader.read(g, "children_scale", "encoder.graph.", c.graph.children_scale);
-  reader.read(g, "max_tree_distance", "encoder.graph.", c.graph.max_tree_distance);
-  reader.read(e, "name_dim", "encoder.", c.name_dim);
-  reader.read(e, "dim", "encoder.", c.dim);
-  reader.read(e, "layers", "encoder.", c.layers);
-  reader.read(e, "heads", "encoder.", c.heads);
-  reader.read(e, "edge_dim", "encoder.", c.edge_dim);
-  reader.read(e, "ffn_mult", "encoder.", c.ffn_mult);
-  reader.read(e, "leaky_slope", "encoder.", c.leaky_slope);
-  reader.read(e, "tree_edges_only", "encoder.", c.tree_edges_only);
-  return c;
-}
-
-PretrainConfig read_pretrain_config(const JsonFields& reader, const json& root) {
-  const json& p = reader.object(root, "pretrain", "");
-  PretrainConfig c;
-  reader.read(p, "offset_loss", "pretrain.", c.offset_loss);
-  reader.read(p, "pair_offset_loss", "pretrain.", c.pair_offset_loss);
-  reader.read(p, "lca_loss", "pretrain.", c.lca_loss);
-  reader.read(p, "name_loss", "pretrain.", c.name_loss);
-  reader.read(p, "offset_weight", "pretrain.", c.offset_weight);
-  reader.read(p, "pair_offset_weight", "pretrain.", c.pair_offset_weight);
-  reader.read(p, "lca_weight", "pretrain.", c.lca_weight);
-  reader.read(p, "name_weight", "pretrain.", c.name_weight);
-  reader.read(p, "pairs_per_skeleton", "pretrain.", c.pairs_per_skeleton);
-  reader.read(p, "temperature", "pretrain.", c.temperature);
-  return c;
-}
-
 }  // namespace
 
 void save_owo_checkpoint(const std::string& dir, OwoPretrainerImpl& model, const OwoCheckpointInfo& info) {
@@ -103,8 +38,8 @@ void save_owo_checkpoint(const std::string& dir, OwoPretrainerImpl& model, const
     const json config = {{"format", kOwoCheckpointFormat},
                          {"version", kOwoCheckpointVersion},
                          {"architecture", kArchitecture},
-                         {"encoder", to_json(model.encoder->config())},
-                         {"pretrain", to_json(model.config())},
+                         {"encoder", train::write_config(model.encoder->config())},
+                         {"pretrain", train::write_config(model.config())},
                          {"training_step", info.training_step},
                          {"data", info.data},
                          {"tensors", kTensorFile}};
@@ -122,8 +57,9 @@ LoadedOwoCheckpoint load_owo_checkpoint(const std::string& dir) {
   if (architecture != kArchitecture) {
     reader.fail("architecture '" + architecture + "' is not " + kArchitecture + "; " + kTrainHint);
   }
-  const OwoConfig encoder_config = read_encoder_config(reader, root);
-  const PretrainConfig pretrain_config = read_pretrain_config(reader, root);
+  const train::ReadOptions fields{config.path, reader.hint(), "", true};
+  const OwoConfig encoder_config = train::read_config_object<OwoConfig>(root, "encoder", fields);
+  const PretrainConfig pretrain_config = train::read_config_object<PretrainConfig>(root, "pretrain", fields);
   LoadedOwoCheckpoint loaded;
   reader.read(root, "training_step", "", loaded.info.training_step);
   reader.read(root, "data", "", loaded.info.data);

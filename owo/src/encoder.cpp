@@ -1,6 +1,8 @@
 // OwO graph encoder: graph attention with edge features over a global node + joints.
 #include "nec/owo/encoder.h"
 
+#include "nec/train/config_fields.h"
+
 #include <torch/torch.h>
 
 #include <limits>
@@ -16,6 +18,18 @@ void require(bool ok, const std::string& message) {
 }
 
 }  // namespace
+
+void visit_fields(train::ConfigVisitor& v, OwoConfig& c) {
+  v.object("graph", c.graph, "skeleton featurization (fixes the input widths)");
+  v.field("name_dim", c.name_dim, "width of the joint-name word vectors; 0 = no names");
+  v.field("dim", c.dim, "node width D");
+  v.field("layers", c.layers, "graph encoder blocks");
+  v.field("heads", c.heads, "attention heads; must divide dim");
+  v.field("edge_dim", c.edge_dim, "edge width");
+  v.field("ffn_mult", c.ffn_mult, "feed-forward hidden width = ffn_mult x width");
+  v.field("leaky_slope", c.leaky_slope, "LeakyReLU slope of the attention scores");
+  v.field("tree_edges_only", c.tree_edges_only, "attend along bones + global edges only (the paper); false: all pairs");
+}
 
 void OwoConfig::validate() const {
   graph.validate();

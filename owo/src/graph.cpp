@@ -1,6 +1,8 @@
 // Skeleton -> graph tensors, and padded batches of graphs.
 #include "nec/owo/graph.h"
 
+#include "nec/train/config_fields.h"
+
 #include <torch/torch.h>
 
 #include <algorithm>
@@ -42,6 +44,14 @@ at::Tensor pad_joints(const at::Tensor& value, int64_t size, bool square, double
 }
 
 }  // namespace
+
+void visit_fields(train::ConfigVisitor& v, GraphOptions& c) {
+  v.field("normalize_scale", c.normalize_scale, "divide offsets and positions by the skeleton's diameter");
+  v.field("position_frequencies", c.position_frequencies, "sinusoidal bands per coordinate of a relative position");
+  v.field("depth_scale", c.depth_scale, "node feature = tree depth x depth_scale");
+  v.field("children_scale", c.children_scale, "node feature = child count x children_scale");
+  v.field("max_tree_distance", c.max_tree_distance, "tree distances are clipped here before scaling to [0, 1]");
+}
 
 void GraphOptions::validate() const {
   require(position_frequencies >= 0 && position_frequencies <= 16,

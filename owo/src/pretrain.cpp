@@ -1,6 +1,8 @@
 // OwO pretraining heads and losses (offset, pair offset, LCA pointer, name InfoNCE).
 #include "nec/owo/pretrain.h"
 
+#include "nec/train/config_fields.h"
+
 #include <torch/torch.h>
 
 #include <cmath>
@@ -22,6 +24,19 @@ std::optional<double> value_of(const at::Tensor& term) {
 }
 
 }  // namespace
+
+void visit_fields(train::ConfigVisitor& v, PretrainConfig& c) {
+  v.field("offset_loss", c.offset_loss, "per-joint rest offset regression");
+  v.field("pair_offset_loss", c.pair_offset_loss, "relative positions of sampled joint pairs");
+  v.field("lca_loss", c.lca_loss, "lowest-common-ancestor prediction of sampled pairs");
+  v.field("name_loss", c.name_loss, "joint-name contrastive loss; needs encoder.name_dim > 0");
+  v.field("offset_weight", c.offset_weight, "weight of the offset term");
+  v.field("pair_offset_weight", c.pair_offset_weight, "weight of the pair offset term");
+  v.field("lca_weight", c.lca_weight, "weight of the LCA term");
+  v.field("name_weight", c.name_weight, "weight of the name term");
+  v.field("pairs_per_skeleton", c.pairs_per_skeleton, "joint pairs sampled per skeleton and step");
+  v.field("temperature", c.temperature, "InfoNCE temperature of the name term");
+}
 
 void PretrainConfig::validate() const {
   require(offset_loss || pair_offset_loss || lca_loss || name_loss, "every task is switched off");

@@ -3,6 +3,7 @@
 
 #include "nec/motion/augment.h"
 #include "nec/motion/names.h"
+#include "nec/train/config_fields.h"
 
 #include <algorithm>
 #include <map>
@@ -140,6 +141,17 @@ SkeletonSet split_skeleton_set(const std::vector<PretrainSkeleton>& skeletons, c
     if (!used[p]) set.unmatched_patterns.push_back(hold_out.patterns[p]);
   }
   return set;
+}
+
+void visit_fields(train::ConfigVisitor& v, AugmentOptions& c) {
+  v.field("probability", c.probability, "chance that a sample is augmented at all");
+  v.field("rest_pose", c.rest_pose, "chance of a rest pose taken from one of its poses");
+  v.field("bone_length", c.bone_length, "chance of bone lengths scaled by body part");
+  v.field("min_bone_factor", c.min_bone_factor, "smallest bone length factor");
+  v.field("max_bone_factor", c.max_bone_factor, "largest bone length factor");
+  v.field("joint_removal", c.joint_removal, "chance of removing distal or zero-length joints");
+  v.field("subdivision", c.subdivision, "chance of inserting joints inside bones");
+  v.field("joint_fraction", c.joint_fraction, "share of joints removed or inserted");
 }
 
 void AugmentOptions::validate() const {

@@ -8,6 +8,7 @@
 #include "nec/owo/graph.h"
 #include "nec/owo/joint_names.h"
 #include "nec/train/checkpoint_io.h"
+#include "nec/train/config_fields.h"
 #include "nec/train/distributed.h"
 #include "nec/train/training_state.h"
 
@@ -18,12 +19,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <initializer_list>
-#include <limits>
-#include <map>
 #include <set>
 #include <stdexcept>
-#include <type_traits>
 
 namespace nec::owo {
 namespace {
@@ -32,220 +29,16 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 using train::JsonFields;
-// Schedule fields a resumed run may change.
-const std::set<std::string> kScheduleFields = {"steps", "log_every", "validate_every", "checkpoint_every"};
 
 void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument(message);
 }
 
-// Reads an object of a config file: optional fields with checked types, and
-// no field it does not know.
-class ConfigFields {
- public:
-  ConfigFields(const std::string& file, const json& object, std::string prefix, std::initializer_list<const char*> known)
-      : file_(file), object_(object), prefix_(std::move(prefix)) {
-    if (!object_.is_object()) fail_field(prefix_.empty() ? "(top level)" : prefix_.substr(0, prefix_.size() - 1), "must be an object");
-    std::string known_list;
-    for (const char* k : known) known_list += (known_list.empty() ? "" : ", ") + std::string(k);
-    for (auto it = object_.begin(); it != object_.end(); ++it) {
-      bool found = it.key() == "comment";  // a note for people, allowed in every object of every config
-      for (const char* k : known) found = found || it.key() == k;
-      if (!found) fail(prefix_ + it.key(), "is not a known field (known here: " + known_list + ")");
-    }
-  }
-
-  template <typename T>
-  void read(const char* key, T& out) const {
-    const auto it = object_.find(key);
-    if (it == object_.end()) return;
-    const json& value = *it;
-    const std::string name = prefix_ + key;
-    if constexpr (std::is_same_v<T, bool>) {
-      if (!value.is_boolean()) fail_field(name, "must be true or false");
-      out = value.get<bool>();
-    } else if constexpr (std::is_same_v<T, uint64_t>) {
-      if (!value.is_number_unsigned()) fail_field(name, "must be a non-negative integer");
-      out = value.get<uint64_t>();
-    } else if constexpr (std::is_integral_v<T>) {
-      if (!value.is_number_integer()) fail_field(name, "must be an integer");
-      const int64_t v = value.get<int64_t>();
-      if (v < std::numeric_limits<T>::min() || v > std::numeric_limits<T>::max()) fail_field(name, "is out of range");
-      out = static_cast<T>(v);
-    } else if constexpr (std::is_floating_point_v<T>) {
-      if (!value.is_number()) fail_field(name, "must be a number");
-      out = value.get<double>();
-    } else {
-      if (!value.is_array()) fail_field(name, "must be a list of strings");
-      out.clear();
-      for (const json& item : value) {
-        if (!item.is_string()) fail_field(name, "must be a list of strings");
-        out.push_back(item.get<std::string>());
-      }
-    }
-  }
-
-  // A nested object, or an empty one when absent.
-  const json& object(const char* key) const {
-    static const json kEmpty = json::object();
-    const auto it = object_.find(key);
-    return it == object_.end() ? kEmpty : *it;
-  }
-
-  [[noreturn]] void fail_field(const std::string& name, const std::string& problem) const {
-    fail(name, problem);
-  }
-
- private:
-  [[noreturn]] void fail(const std::string& name, const std::string& problem) const {
-    throw InputError(file_, 0, "field '" + name + "' " + problem);
-  }
-
-  const std::string& file_;
-  const json& object_;
-  std::string prefix_;
-};
-
 OwoTrainingConfig config_from_json(const json& root, const std::string& file) {
-  OwoTrainingConfig c;
-  const ConfigFields top(file, root, "",
-                         {"encoder", "pretrain", "optimizer", "data", "names", "batch_size", "batch_joint_pairs", "steps", "log_every",
-                          "validate_every", "checkpoint_every", "seed"});
-  top.read("names", c.names);
-  top.read("batch_size", c.batch_size);
-  top.read("batch_joint_pairs", c.batch_joint_pairs);
-  top.read("steps", c.steps);
-  top.read("log_every", c.log_every);
-  top.read("validate_every", c.validate_every);
-  top.read("checkpoint_every", c.checkpoint_every);
-  top.read("seed", c.seed);
-
-  const ConfigFields encoder(file, top.object("encoder"), "encoder.",
-                             {"graph", "name_dim", "dim", "layers", "heads", "edge_dim", "ffn_mult", "leaky_slope",
-                              "tree_edges_only"});
-  const ConfigFields graph(file, encoder.object("graph"), "encoder.graph.",
-                           {"normalize_scale", "position_frequencies", "depth_scale", "children_scale",
-                            "max_tree_distance"});
-  graph.read("normalize_scale", c.encoder.graph.normalize_scale);
-  graph.read("position_frequencies", c.encoder.graph.position_frequencies);
-  graph.read("depth_scale", c.encoder.graph.depth_scale);
-  graph.read("children_scale", c.encoder.graph.children_scale);
-  graph.read("max_tree_distance", c.encoder.graph.max_tree_distance);
-  encoder.read("name_dim", c.encoder.name_dim);
-  encoder.read("dim", c.encoder.dim);
-  encoder.read("layers", c.encoder.layers);
-  encoder.read("heads", c.encoder.heads);
-  encoder.read("edge_dim", c.encoder.edge_dim);
-  encoder.read("ffn_mult", c.encoder.ffn_mult);
-  encoder.read("leaky_slope", c.encoder.leaky_slope);
-  encoder.read("tree_edges_only", c.encoder.tree_edges_only);
-
-  const ConfigFields pretrain(file, top.object("pretrain"), "pretrain.",
-                              {"offset_loss", "pair_offset_loss", "lca_loss", "name_loss", "offset_weight",
-                               "pair_offset_weight", "lca_weight", "name_weight", "pairs_per_skeleton", "temperature"});
-  pretrain.read("offset_loss", c.pretrain.offset_loss);
-  pretrain.read("pair_offset_loss", c.pretrain.pair_offset_loss);
-  pretrain.read("lca_loss", c.pretrain.lca_loss);
-  pretrain.read("name_loss", c.pretrain.name_loss);
-  pretrain.read("offset_weight", c.pretrain.offset_weight);
-  pretrain.read("pair_offset_weight", c.pretrain.pair_offset_weight);
-  pretrain.read("lca_weight", c.pretrain.lca_weight);
-  pretrain.read("name_weight", c.pretrain.name_weight);
-  pretrain.read("pairs_per_skeleton", c.pretrain.pairs_per_skeleton);
-  pretrain.read("temperature", c.pretrain.temperature);
-
-  const ConfigFields optimizer(file, top.object("optimizer"), "optimizer.",
-                               {"learning_rate", "weight_decay", "warmup_steps", "final_lr_fraction", "grad_clip"});
-  optimizer.read("learning_rate", c.optimizer.learning_rate);
-  optimizer.read("weight_decay", c.optimizer.weight_decay);
-  optimizer.read("warmup_steps", c.optimizer.warmup_steps);
-  optimizer.read("final_lr_fraction", c.optimizer.final_lr_fraction);
-  optimizer.read("grad_clip", c.optimizer.grad_clip);
-
-  const ConfigFields data(file, top.object("data"), "data.",
-                          {"held_out", "cache_held_out", "poses_per_skeleton", "size_buckets", "augment"});
-  data.read("held_out", c.data.held_out);
-  data.read("cache_held_out", c.data.cache_held_out);
-  data.read("poses_per_skeleton", c.data.poses_per_skeleton);
-  data.read("size_buckets", c.data.size_buckets);
-  const ConfigFields augment(file, data.object("augment"), "data.augment.",
-                             {"probability", "rest_pose", "bone_length", "min_bone_factor", "max_bone_factor",
-                              "joint_removal", "subdivision", "joint_fraction"});
-  AugmentOptions& a = c.data.augment;
-  augment.read("probability", a.probability);
-  augment.read("rest_pose", a.rest_pose);
-  augment.read("bone_length", a.bone_length);
-  augment.read("min_bone_factor", a.min_bone_factor);
-  augment.read("max_bone_factor", a.max_bone_factor);
-  augment.read("joint_removal", a.joint_removal);
-  augment.read("subdivision", a.subdivision);
-  augment.read("joint_fraction", a.joint_fraction);
-
-  try {
-    c.validate();
-  } catch (const std::invalid_argument& e) {
-    throw InputError(file, 0, e.what());
-  }
-  return c;
+  return train::read_valid_config<OwoTrainingConfig>(root, {file, "`nec train owo --help` lists every field", "", false});
 }
 
-json config_to_json(const OwoTrainingConfig& c) {
-  const AugmentOptions& a = c.data.augment;
-  return {{"encoder",
-           {{"graph",
-             {{"normalize_scale", c.encoder.graph.normalize_scale},
-              {"position_frequencies", c.encoder.graph.position_frequencies},
-              {"depth_scale", c.encoder.graph.depth_scale},
-              {"children_scale", c.encoder.graph.children_scale},
-              {"max_tree_distance", c.encoder.graph.max_tree_distance}}},
-            {"name_dim", c.encoder.name_dim},
-            {"dim", c.encoder.dim},
-            {"layers", c.encoder.layers},
-            {"heads", c.encoder.heads},
-            {"edge_dim", c.encoder.edge_dim},
-            {"ffn_mult", c.encoder.ffn_mult},
-            {"leaky_slope", c.encoder.leaky_slope},
-            {"tree_edges_only", c.encoder.tree_edges_only}}},
-          {"pretrain",
-           {{"offset_loss", c.pretrain.offset_loss},
-            {"pair_offset_loss", c.pretrain.pair_offset_loss},
-            {"lca_loss", c.pretrain.lca_loss},
-            {"name_loss", c.pretrain.name_loss},
-            {"offset_weight", c.pretrain.offset_weight},
-            {"pair_offset_weight", c.pretrain.pair_offset_weight},
-            {"lca_weight", c.pretrain.lca_weight},
-            {"name_weight", c.pretrain.name_weight},
-            {"pairs_per_skeleton", c.pretrain.pairs_per_skeleton},
-            {"temperature", c.pretrain.temperature}}},
-          {"optimizer",
-           {{"learning_rate", c.optimizer.learning_rate},
-            {"weight_decay", c.optimizer.weight_decay},
-            {"warmup_steps", c.optimizer.warmup_steps},
-            {"final_lr_fraction", c.optimizer.final_lr_fraction},
-            {"grad_clip", c.optimizer.grad_clip}}},
-          {"data",
-           {{"held_out", c.data.held_out},
-            {"cache_held_out", c.data.cache_held_out},
-            {"poses_per_skeleton", c.data.poses_per_skeleton},
-            {"size_buckets", c.data.size_buckets},
-            {"augment",
-             {{"probability", a.probability},
-              {"rest_pose", a.rest_pose},
-              {"bone_length", a.bone_length},
-              {"min_bone_factor", a.min_bone_factor},
-              {"max_bone_factor", a.max_bone_factor},
-              {"joint_removal", a.joint_removal},
-              {"subdivision", a.subdivision},
-              {"joint_fraction", a.joint_fraction}}}}},
-          {"names", c.names},
-          {"batch_size", c.batch_size},
-          {"batch_joint_pairs", c.batch_joint_pairs},
-          {"steps", c.steps},
-          {"log_every", c.log_every},
-          {"validate_every", c.validate_every},
-          {"checkpoint_every", c.checkpoint_every},
-          {"seed", c.seed}};
-}
+json config_to_json(const OwoTrainingConfig& c) { return train::write_config(c); }
 
 std::vector<std::string> string_list(const JsonFields& fields, const json& root, const std::string& key) {
   const json& value = root.contains(key) ? root.at(key) : json();
@@ -259,6 +52,31 @@ std::vector<std::string> string_list(const JsonFields& fields, const json& root,
 }
 
 }  // namespace
+
+void visit_fields(train::ConfigVisitor& v, OwoDataConfig& c) {
+  v.field("held_out", c.held_out, "skeletons held out of training, by label pattern");
+  v.field("cache_held_out", c.cache_held_out, "also hold out what the caches hold out");
+  v.field("poses_per_skeleton", c.poses_per_skeleton, "frames kept per skeleton for rest-pose augmentation");
+  v.field("size_buckets", c.size_buckets, "a batch takes skeletons of one of this many joint-count ranges; 1 = any mix");
+  v.object("augment", c.augment, "rig augmentation of the training skeletons");
+}
+
+void visit_fields(train::ConfigVisitor& v, OwoTrainingConfig& c) {
+  using train::OnResume;
+  v.object("encoder", c.encoder, "the OwO graph encoder (saved with the model)");
+  v.object("pretrain", c.pretrain, "the self-supervised losses (saved with the model)");
+  v.object("optimizer", c.optimizer, "AdamW, warm-up then cosine decay");
+  v.object("data", c.data, "which skeletons train, and how they are augmented");
+  v.field("names", c.names, "feed joint-name word vectors (encoder.name_dim = their width)");
+  v.field("batch_size", c.batch_size, "skeletons per step at most");
+  v.field("batch_joint_pairs", c.batch_joint_pairs, "and at most this many B x Jmax^2 per step; 0 = no limit");
+  v.field("steps", c.steps, "the step training ends at", OnResume::kMayChange);
+  v.field("log_every", c.log_every, "progress line every N steps off a terminal; 0 = only the last", OnResume::kMayChange);
+  v.field("validate_every", c.validate_every, "held-out validation every N steps and at the end; 0 = never",
+          OnResume::kMayChange);
+  v.field("checkpoint_every", c.checkpoint_every, "checkpoint every N steps; 0 = only at the end", OnResume::kMayChange);
+  v.field("seed", c.seed, "initial weights, batches, augmentation and sampled pairs");
+}
 
 void OwoDataConfig::validate() const {
   require(poses_per_skeleton >= 0 && poses_per_skeleton <= 1024, "data.poses_per_skeleton must be in [0, 1024]");
@@ -312,7 +130,7 @@ OwoTrainingConfig parse_owo_training_config(const std::string& text, const std::
 std::string owo_training_config_json(const OwoTrainingConfig& config) { return config_to_json(config).dump(2) + "\n"; }
 
 std::vector<std::string> differing_fields(const OwoTrainingConfig& a, const OwoTrainingConfig& b) {
-  return train::differing_fields(config_to_json(a), config_to_json(b), kScheduleFields);
+  return train::differing_fields(config_to_json(a), config_to_json(b), train::fields_that_may_change<OwoTrainingConfig>());
 }
 
 SkeletonSet load_skeleton_set(const std::vector<std::string>& caches, const HoldOut& hold_out,
@@ -528,6 +346,39 @@ std::string OwoTrainer::describe_data(const std::vector<std::string>& data) cons
          std::to_string(skeletons_.held_out.size()) + " held out" + (held.empty() ? "" : " (" + held + ")");
 }
 
+train::TrainingSchedule OwoTrainer::loop_schedule() const {
+  train::TrainingSchedule schedule;
+  schedule.total_steps = config_.steps;
+  schedule.log_every = config_.log_every;
+  schedule.validate_every = skeletons_.held_out.empty() ? 0 : config_.validate_every;
+  schedule.checkpoint_every = config_.checkpoint_every;
+  return schedule;
+}
+
+train::TrainingHooks OwoTrainer::hooks(const std::string& out_dir, const std::vector<std::string>& data) {
+  train::TrainingHooks hooks;
+  hooks.step = [this](int64_t step) {
+    const PretrainLosses l = this->step(step);
+    train::LossTerms terms{{"total", l.total}};
+    if (l.offset) terms.emplace_back("offset", *l.offset);
+    if (l.pair_offset) terms.emplace_back("pair", *l.pair_offset);
+    if (l.lca) terms.emplace_back("lca", *l.lca);
+    if (l.name) terms.emplace_back("name", *l.name);
+    if (l.lca_accuracy) terms.emplace_back("lca_acc", *l.lca_accuracy);
+    if (l.grad_norm) terms.emplace_back("grad", *l.grad_norm);
+    return terms;
+  };
+  hooks.validate = [this](int64_t) {
+    const ScoreSummary held_out = summarize(score_held_out());
+    return train::LossTerms{{"held_out_lca_acc", held_out.lca_accuracy},
+                            {"offset_pct", held_out.offset_percent},
+                            {"rebuilt", held_out.rebuild_rate},
+                            {"decoded", held_out.decode_rate}};
+  };
+  hooks.checkpoint = [this, out_dir, data](int64_t step) { save(out_dir, step, data); };
+  return hooks;
+}
+
 void OwoTrainer::save(const std::string& dir, int64_t step, const std::vector<std::string>& data) {
   train::TrainingState state;
   state.model = "owo";
@@ -550,7 +401,7 @@ int64_t OwoTrainer::resume(const std::string& dir) {
   if (!fs::is_directory(dir, ec)) throw InputError(dir, 0, "no such checkpoint directory to resume from");
   LoadedOwoCheckpoint loaded = load_owo_checkpoint(dir);
   const train::TrainingState state = train::resumable_state(dir, "owo", loaded.info.training_step);
-  train::check_resumable(state, config_to_json(config_), kScheduleFields, record_path);
+  train::check_resumable(state, config_to_json(config_), train::fields_that_may_change<OwoTrainingConfig>(), record_path);
   const OwoTrainingRecord record = record_of(state, record_path);
   std::set<std::string> then(record.train_skeletons.begin(), record.train_skeletons.end()), now;
   for (const PretrainSkeleton& s : skeletons_.train) now.insert(s.hash);

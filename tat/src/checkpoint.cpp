@@ -5,6 +5,7 @@
 #include "nec/motion/files.h"
 #include "nec/owo/checkpoint.h"
 #include "nec/train/checkpoint_io.h"
+#include "nec/train/config_fields.h"
 
 #include <torch/torch.h>
 
@@ -23,64 +24,7 @@ constexpr const char* kTensorFile = "tensors.pt";
 constexpr const char* kOwoDir = "owo";
 constexpr const char* kTrainHint = "run `nec train tat` to make one";
 
-json to_json(const QuantizerConfig& c) {
-  return {{"layers", c.layers},
-          {"codebook_size", c.codebook_size},
-          {"code_dim", c.code_dim},
-          {"ema_decay", c.ema_decay},
-          {"commitment_weight", c.commitment_weight},
-          {"dead_code_threshold", c.dead_code_threshold},
-          {"quantize_dropout", c.quantize_dropout}};
-}
-
 }  // namespace
-
-json to_json(const TatConfig& c) {
-  return {{"kind", to_string(c.kind)},
-          {"joint_embedding_dim", c.joint_embedding_dim},
-          {"dim", c.dim},
-          {"blocks", c.blocks},
-          {"attention_layers", c.attention_layers},
-          {"heads", c.heads},
-          {"max_joints", c.max_joints},
-          {"quantizer", to_json(c.quantizer)}};
-}
-
-TatConfig tat_config_from_json(const json& object, const std::string& file, const std::string& where) {
-  const train::JsonFields fields(file, "fix the field or remove it to use the default");
-  TatConfig c;
-  // Every field is optional in a training config; present ones must have the right type.
-  auto read = [&](const json& parent, const char* key, const std::string& prefix, auto& out) {
-    if (parent.contains(key)) fields.read(parent, key, prefix, out);
-  };
-  if (object.contains("kind")) {
-    std::string kind;
-    fields.read(object, "kind", where, kind);
-    try {
-      c.kind = tokenizer_kind_from_string(kind);
-    } catch (const std::invalid_argument& e) {
-      fields.fail("field '" + where + "kind': " + e.what());
-    }
-  }
-  read(object, "joint_embedding_dim", where, c.joint_embedding_dim);
-  read(object, "dim", where, c.dim);
-  read(object, "blocks", where, c.blocks);
-  read(object, "attention_layers", where, c.attention_layers);
-  read(object, "heads", where, c.heads);
-  read(object, "max_joints", where, c.max_joints);
-  if (object.contains("quantizer")) {
-    const std::string q_where = where + "quantizer.";
-    const json& q = fields.object(object, "quantizer", where);
-    read(q, "layers", q_where, c.quantizer.layers);
-    read(q, "codebook_size", q_where, c.quantizer.codebook_size);
-    read(q, "code_dim", q_where, c.quantizer.code_dim);
-    read(q, "ema_decay", q_where, c.quantizer.ema_decay);
-    read(q, "commitment_weight", q_where, c.quantizer.commitment_weight);
-    read(q, "dead_code_threshold", q_where, c.quantizer.dead_code_threshold);
-    read(q, "quantize_dropout", q_where, c.quantizer.quantize_dropout);
-  }
-  return c;
-}
 
 void save_tat_checkpoint(const std::string& dir, TokenizerImpl& tokenizer, owo::OwoPretrainerImpl& owo,
                          const TatCheckpointInfo& info, const std::function<void(const std::string&)>& extra) {
@@ -92,7 +36,7 @@ void save_tat_checkpoint(const std::string& dir, TokenizerImpl& tokenizer, owo::
     const json config = {{"format", kTatCheckpointFormat},
                          {"version", kTatCheckpointVersion},
                          {"architecture", kArchitecture},
-                         {"tokenizer", to_json(tokenizer.config())},
+                         {"tokenizer", train::write_config(tokenizer.config())},
                          {"window_frames", info.window_frames},
                          {"fps", info.fps},
                          {"training_step", info.training_step},
@@ -111,8 +55,8 @@ LoadedTatCheckpoint load_tat_checkpoint(const std::string& dir) {
   std::string architecture;
   fields.read(root, "architecture", "", architecture);
   if (architecture != kArchitecture) fields.fail("architecture '" + architecture + "' is not " + kArchitecture);
-  if (!root.contains("tokenizer")) fields.fail("field 'tokenizer' is missing; " + fields.hint());
-  const TatConfig tokenizer_config = tat_config_from_json(fields.object(root, "tokenizer", ""), config.path, "tokenizer.");
+  const TatConfig tokenizer_config =
+      train::read_config_object<TatConfig>(root, "tokenizer", {config.path, fields.hint(), "", true});
   LoadedTatCheckpoint loaded;
   fields.read(root, "window_frames", "", loaded.info.window_frames);
   fields.read(root, "fps", "", loaded.info.fps);

@@ -4,6 +4,7 @@
 
 #include "nec/tat/fk.h"
 #include "nec/tat/model_space.h"
+#include "nec/train/config_fields.h"
 
 #include <torch/torch.h>
 
@@ -26,6 +27,13 @@ at::Tensor masked_l1(const at::Tensor& a, const at::Tensor& b, const at::Tensor&
 }
 
 }  // namespace
+
+void visit_fields(train::ConfigVisitor& v, LossWeights& c) {
+  v.field("rotation", c.rotation, "weight of the L1 on the joints' rotations");
+  v.field("root", c.root, "weight of the L1 on the root's motion");
+  v.field("position", c.position, "weight of the L1 on world joint positions");
+  v.field("velocity", c.velocity, "weight of the L1 on joint velocities");
+}
 
 void LossWeights::validate() const {
   require_weight(rotation, "rotation");

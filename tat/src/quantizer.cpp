@@ -1,6 +1,7 @@
 // Residual vector quantizer with EMA codebooks, dead-code reset and quantize dropout.
 #include "nec/tat/quantizer.h"
 
+#include "nec/train/config_fields.h"
 #include "nec/train/distributed.h"
 
 #include <torch/torch.h>
@@ -31,6 +32,16 @@ at::Tensor sample_rows(const at::Tensor& rows, const at::Tensor& weight, const a
 }
 
 }  // namespace
+
+void visit_fields(train::ConfigVisitor& v, QuantizerConfig& c) {
+  v.field("layers", c.layers, "residual layers R");
+  v.field("codebook_size", c.codebook_size, "codes per layer K");
+  v.field("code_dim", c.code_dim, "width of a code = width of the latent");
+  v.field("ema_decay", c.ema_decay, "decay of the codebooks' moving averages");
+  v.field("commitment_weight", c.commitment_weight, "weight of the commitment loss");
+  v.field("dead_code_threshold", c.dead_code_threshold, "average use per batch below which a code is reseeded");
+  v.field("quantize_dropout", c.quantize_dropout, "chance per batch of training with only the first n layers");
+}
 
 void QuantizerConfig::validate() const {
   require(layers >= 1, "layers must be >= 1, got " + std::to_string(layers));

@@ -3,6 +3,7 @@
 #include "nec/tat/tokenizer.h"
 
 #include "nec/tat/model_space.h"
+#include "nec/train/config_fields.h"
 
 #include <torch/torch.h>
 
@@ -381,6 +382,18 @@ TokenizerKind tokenizer_kind_from_string(const std::string& name) {
     if (to_string(kind) == name) return kind;
   }
   throw std::invalid_argument("unknown tokenizer kind '" + name + "' (expected nec-rvq, nec-vq or zero-pad-rvq)");
+}
+
+void visit_fields(train::ConfigVisitor& v, TatConfig& c) {
+  v.choice("kind", c.kind, {TokenizerKind::NecRvq, TokenizerKind::NecVq, TokenizerKind::ZeroPadRvq},
+           [](TokenizerKind kind) { return to_string(kind); }, "the tokenizer or a baseline");
+  v.field("joint_embedding_dim", c.joint_embedding_dim, "width of the OwO joint embeddings (set from the OwO checkpoint)");
+  v.field("dim", c.dim, "width of the per-joint features");
+  v.field("blocks", c.blocks, "spatio-temporal blocks; time is downsampled by 2^blocks");
+  v.field("attention_layers", c.attention_layers, "spatial transformer layers per block");
+  v.field("heads", c.heads, "attention heads; must divide dim");
+  v.field("max_joints", c.max_joints, "zero-pad-rvq only: joints of the padded input; 0 = the cache's largest");
+  v.object("quantizer", c.quantizer, "the residual vector quantizer");
 }
 
 void TatConfig::validate() const {

@@ -1,12 +1,14 @@
 // Tokenizer training: config file, steps, validation, checkpoints and resume.
 #include "nec/tat/training.h"
 
+#include "nec/motion/augment.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/tat/batch_tensors.h"
 #include "nec/tat/checkpoint.h"
 #include "nec/tat/inference.h"
 #include "nec/train/checkpoint_io.h"
+#include "nec/train/config_fields.h"
 #include "nec/train/distributed.h"
 #include "nec/train/training_state.h"
 
@@ -27,26 +29,11 @@ void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument("TatTrainConfig: " + message);
 }
 
-// Fields a resumed run may change.
-const std::set<std::string> kScheduleFields = {"steps", "log_every", "validate_every", "checkpoint_every"};
-
 // The loss terms of a step, in the order they are summed over the ranks.
 std::vector<std::string> term_names(int64_t layers) {
   std::vector<std::string> names{"loss", "rotation", "root", "position", "velocity", "commitment"};
   for (int64_t r = 0; r < layers; ++r) names.push_back("perplexity" + std::to_string(r));
   return names;
-}
-
-void reject_unknown(const json& object, const std::set<std::string>& known, const train::JsonFields& fields,
-                    const std::string& where) {
-  std::string known_list;
-  for (const std::string& key : known) known_list += (known_list.empty() ? "" : ", ") + key;
-  for (const auto& item : object.items()) {
-    // "comment": a note for people, allowed in every object of every config.
-    if (!known.count(item.key()) && item.key() != "comment") {
-      fields.fail("field '" + where + item.key() + "' is not a known field (known here: " + known_list + ")");
-    }
-  }
 }
 
 }  // namespace
@@ -60,101 +47,55 @@ void TatTrainConfig::validate() const {
     require(false, std::string("optimizer.") + e.what());
   }
   require(steps >= 1 && batch_size >= 1, "steps and batch_size must be >= 1");
-  require(window_frames >= model.downsampling() && window_frames % model.downsampling() == 0,
-          "window_frames must be a positive multiple of the downsampling " + std::to_string(model.downsampling()) +
-              ", got " + std::to_string(window_frames));
-  require(augment_probability >= 0 && augment_probability <= 1, "augment_probability must be in [0, 1]");
-  require(joint_buckets >= 0 && max_joint_frames >= 0, "joint_buckets and max_joint_frames must be >= 0");
+  require(data.window_frames >= model.downsampling() && data.window_frames % model.downsampling() == 0,
+          "data.window_frames must be a positive multiple of the downsampling " + std::to_string(model.downsampling()) +
+              ", got " + std::to_string(data.window_frames));
+  require(data.augment.probability >= 0 && data.augment.probability <= 1, "data.augment.probability must be in [0, 1]");
+  require(data.augment.probability == 0 || !data.augment.kinds.empty(), "data.augment.kinds is empty");
+  for (const std::string& kind : data.augment.kinds) {
+    try {
+      augment_kind_from_string(kind);
+    } catch (const std::invalid_argument& e) {
+      require(false, std::string("data.augment.kinds: ") + e.what());
+    }
+  }
+  require(data.joint_buckets >= 0 && max_joint_frames >= 0, "data.joint_buckets and max_joint_frames must be >= 0");
   require(log_every >= 0 && validate_every >= 0 && checkpoint_every >= 0,
           "log_every, validate_every and checkpoint_every must be >= 0 (0: only at the end; validation: never)");
   require(validation_batches >= 1, "validation_batches must be >= 1");
 }
 
-json to_json(const TatTrainConfig& c) {
-  return {{"model", to_json(c.model)},
-          {"loss",
-           {{"rotation", c.loss.rotation},
-            {"root", c.loss.root},
-            {"position", c.loss.position},
-            {"velocity", c.loss.velocity}}},
-          {"optimizer",
-           {{"learning_rate", c.optimizer.learning_rate},
-            {"final_lr_fraction", c.optimizer.final_lr_fraction},
-            {"warmup_steps", c.optimizer.warmup_steps},
-            {"weight_decay", c.optimizer.weight_decay},
-            {"grad_clip", c.optimizer.grad_clip}}},
-          {"steps", c.steps},
-          {"batch_size", c.batch_size},
-          {"window_frames", c.window_frames},
-          {"augment_probability", c.augment_probability},
-          {"joint_buckets", c.joint_buckets},
-          {"max_joint_frames", c.max_joint_frames},
-          {"log_every", c.log_every},
-          {"validate_every", c.validate_every},
-          {"validation_batches", c.validation_batches},
-          {"checkpoint_every", c.checkpoint_every},
-          {"seed", c.seed}};
+void visit_fields(train::ConfigVisitor& v, ClipAugmentConfig& c) {
+  v.field("probability", c.probability, "chance that a training clip's rig is augmented");
+  v.field("kinds", c.kinds, "the augmentations an augmented clip draws one of (rest, length, remove, subdivide)");
+}
+
+void visit_fields(train::ConfigVisitor& v, TatDataConfig& c) {
+  v.field("window_frames", c.window_frames, "training crop in frames; a multiple of 2^model.blocks");
+  v.field("joint_buckets", c.joint_buckets, "runs of this many batches are sorted by joint count (less padding); 0 = off");
+  v.object("augment", c.augment, "rig augmentation of the training clips");
+}
+
+void visit_fields(train::ConfigVisitor& v, TatTrainConfig& c) {
+  using train::OnResume;
+  v.object("model", c.model, "the tokenizer");
+  v.object("loss", c.loss, "weights of the reconstruction terms");
+  v.object("optimizer", c.optimizer, "AdamW, warm-up then cosine decay");
+  v.object("data", c.data, "how batches are cut from the cache");
+  v.field("steps", c.steps, "the step training ends at", OnResume::kMayChange);
+  v.field("batch_size", c.batch_size, "clips per step over all processes");
+  v.field("max_joint_frames", c.max_joint_frames,
+          "most B x J x T entries per forward pass; bigger batches run in parts (same update); 0 = no limit");
+  v.field("log_every", c.log_every, "progress line every N steps off a terminal; 0 = only the last", OnResume::kMayChange);
+  v.field("validate_every", c.validate_every, "validation every N steps and at the end; 0 = never", OnResume::kMayChange);
+  v.field("validation_batches", c.validation_batches, "batches of the val split per validation");
+  v.field("checkpoint_every", c.checkpoint_every, "checkpoint every N steps and at the end; 0 = only at the end",
+          OnResume::kMayChange);
+  v.field("seed", c.seed, "initial weights, batches and every step's random draws");
 }
 
 TatTrainConfig tat_train_config_from_json(const json& object, const std::string& file) {
-  const train::JsonFields fields(file, "see configs/tat_cpu.json for every field and its default");
-  if (!object.is_object()) fields.fail("a training config must be a JSON object");
-  reject_unknown(object,
-                 {"model", "loss", "optimizer", "steps", "batch_size", "window_frames", "augment_probability", "joint_buckets", "max_joint_frames",
-                  "log_every", "validate_every", "validation_batches", "checkpoint_every", "seed"},
-                 fields, "");
-  TatTrainConfig c;
-  if (object.contains("model")) {
-    const json& model = fields.object(object, "model", "");
-    reject_unknown(model, {"kind", "joint_embedding_dim", "dim", "blocks", "attention_layers", "heads", "max_joints",
-                           "quantizer"},
-                   fields, "model.");
-    if (model.contains("quantizer")) {
-      reject_unknown(fields.object(model, "quantizer", "model."),
-                     {"layers", "codebook_size", "code_dim", "ema_decay", "commitment_weight", "dead_code_threshold",
-                      "quantize_dropout"},
-                     fields, "model.quantizer.");
-    }
-    c.model = tat_config_from_json(model, file, "model.");
-  }
-  auto read = [&](const json& parent, const char* key, const std::string& where, auto& out) {
-    if (parent.contains(key)) fields.read(parent, key, where, out);
-  };
-  if (object.contains("loss")) {
-    const json& loss = fields.object(object, "loss", "");
-    reject_unknown(loss, {"rotation", "root", "position", "velocity"}, fields, "loss.");
-    read(loss, "rotation", "loss.", c.loss.rotation);
-    read(loss, "root", "loss.", c.loss.root);
-    read(loss, "position", "loss.", c.loss.position);
-    read(loss, "velocity", "loss.", c.loss.velocity);
-  }
-  if (object.contains("optimizer")) {
-    const json& optimizer = fields.object(object, "optimizer", "");
-    reject_unknown(optimizer, {"learning_rate", "final_lr_fraction", "warmup_steps", "weight_decay", "grad_clip"},
-                   fields, "optimizer.");
-    read(optimizer, "learning_rate", "optimizer.", c.optimizer.learning_rate);
-    read(optimizer, "final_lr_fraction", "optimizer.", c.optimizer.final_lr_fraction);
-    read(optimizer, "warmup_steps", "optimizer.", c.optimizer.warmup_steps);
-    read(optimizer, "weight_decay", "optimizer.", c.optimizer.weight_decay);
-    read(optimizer, "grad_clip", "optimizer.", c.optimizer.grad_clip);
-  }
-  read(object, "steps", "", c.steps);
-  read(object, "batch_size", "", c.batch_size);
-  read(object, "window_frames", "", c.window_frames);
-  read(object, "augment_probability", "", c.augment_probability);
-  read(object, "joint_buckets", "", c.joint_buckets);
-  read(object, "max_joint_frames", "", c.max_joint_frames);
-  read(object, "log_every", "", c.log_every);
-  read(object, "validate_every", "", c.validate_every);
-  read(object, "validation_batches", "", c.validation_batches);
-  read(object, "checkpoint_every", "", c.checkpoint_every);
-  read(object, "seed", "", c.seed);
-  try {
-    c.validate();
-  } catch (const std::invalid_argument& e) {
-    fields.fail(e.what());
-  }
-  return c;
+  return train::read_valid_config<TatTrainConfig>(object, {file, "`nec train tat --help` lists every field", "", false});
 }
 
 TatTrainConfig read_tat_train_config(const std::string& path) {
@@ -196,11 +137,13 @@ TatTrainer::TatTrainer(const TatTrainConfig& config, const DatasetCache& cache, 
 
   BatchOptions batches;
   batches.batch_size = static_cast<int>(config_.batch_size);
-  batches.crop_frames = static_cast<int>(config_.window_frames);
+  batches.crop_frames = static_cast<int>(config_.data.window_frames);
   batches.seed = config_.seed;
   batches.drop_last = true;
-  batches.augment_probability = config_.augment_probability;
-  batches.joint_buckets = static_cast<int>(config_.joint_buckets);
+  batches.augment_probability = config_.data.augment.probability;
+  batches.augment_kinds.clear();
+  for (const std::string& kind : config_.data.augment.kinds) batches.augment_kinds.push_back(augment_kind_from_string(kind));
+  batches.joint_buckets = static_cast<int>(config_.data.joint_buckets);
   if (config_.model.kind == TokenizerKind::ZeroPadRvq) {
     // Subdivision adds joints beyond the fixed channel layout of the padding baseline.
     batches.augment_kinds = {AugmentKind::RestPose, AugmentKind::BoneLength, AugmentKind::JointRemoval};
@@ -322,16 +265,50 @@ std::optional<ReconstructionMetrics> TatTrainer::validate() {
   return metrics;
 }
 
+train::TrainingSchedule TatTrainer::loop_schedule() const {
+  train::TrainingSchedule schedule;
+  schedule.total_steps = config_.steps;
+  schedule.log_every = config_.log_every;
+  schedule.validate_every = has_validation() ? config_.validate_every : 0;
+  schedule.checkpoint_every = config_.checkpoint_every;
+  return schedule;
+}
+
+train::TrainingHooks TatTrainer::hooks(const std::string& out_dir) {
+  train::TrainingHooks hooks;
+  hooks.step = [this](int64_t step) {
+    const LossTerms terms = this->step(step);
+    train::LossTerms out;
+    for (const char* key : {"loss", "rotation", "root", "position", "velocity", "commitment"}) {
+      out.emplace_back(key, terms.at(key));
+    }
+    for (int64_t r = 0; r < config_.model.quantizer.layers; ++r) {
+      const auto it = terms.find("perplexity" + std::to_string(r));
+      if (it != terms.end()) out.emplace_back("ppl" + std::to_string(r), it->second);
+    }
+    out.emplace_back("lr", terms.at("lr"));
+    return out;
+  };
+  hooks.validate = [this](int64_t) {
+    const std::optional<ReconstructionMetrics> metrics = validate();
+    return train::LossTerms{{"val_mpjpe", metrics->mpjpe()},
+                            {"val_mpjpe_no_trans", metrics->mpjpe_no_translation()},
+                            {"val_geodesic_deg", metrics->geodesic_degrees()}};
+  };
+  hooks.checkpoint = [this, out_dir](int64_t step) { save(out_dir, step); };
+  return hooks;
+}
+
 void TatTrainer::save(const std::string& dir, int64_t step) {
   TatCheckpointInfo info;
-  info.window_frames = config_.window_frames;
+  info.window_frames = config_.data.window_frames;
   info.fps = cache_.fps;
   info.training_step = step;
   info.data = data_name_ + " (" + std::to_string(train_->clip_count()) + " train clips)";
   train::TrainingState state;
   state.model = "tat";
   state.step = step;
-  state.config = to_json(config_);
+  state.config = train::write_config(config_);
   state.schedule = schedule_.to_json();
   state.data = {{"epoch", train_->epoch()}, {"index", train_->index()}};
   save_tat_checkpoint(dir, *tokenizer_, *owo_, info,
@@ -342,7 +319,7 @@ int64_t TatTrainer::resume(const std::string& dir) {
   const std::string state_path = (std::filesystem::path(dir) / train::kTrainingStateFile).string();
   LoadedTatCheckpoint loaded = load_tat_checkpoint(dir);
   const train::TrainingState state = train::resumable_state(dir, "tat", loaded.info.training_step);
-  train::check_resumable(state, to_json(config_), kScheduleFields, state_path);
+  train::check_resumable(state, train::write_config(config_), train::fields_that_may_change<TatTrainConfig>(), state_path);
   train::copy_module_tensors(*loaded.tokenizer, *tokenizer_);
   train::load_optimizer_state(dir, *optimizer_, device_);
   schedule_ = train::LearningRateSchedule::resumed(config_.optimizer, state.schedule, state.step, config_.steps,

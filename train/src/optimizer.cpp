@@ -2,6 +2,7 @@
 #include "nec/train/optimizer.h"
 
 #include "nec/motion/error.h"
+#include "nec/train/config_fields.h"
 #include "nec/train/distributed.h"
 
 #include <torch/torch.h>
@@ -33,6 +34,14 @@ void OptimizerConfig::validate() const {
   require(warmup_steps >= 0, "warmup_steps must be >= 0");
   require(std::isfinite(weight_decay) && weight_decay >= 0.0, "weight_decay must be >= 0");
   require(std::isfinite(grad_clip) && grad_clip >= 0.0, "grad_clip must be >= 0 (0 = no clipping)");
+}
+
+void visit_fields(ConfigVisitor& v, OptimizerConfig& c) {
+  v.field("learning_rate", c.learning_rate, "peak learning rate after warm-up");
+  v.field("final_lr_fraction", c.final_lr_fraction, "rate at the last step, as a fraction of learning_rate");
+  v.field("warmup_steps", c.warmup_steps, "steps of linear warm-up; 0 = none");
+  v.field("weight_decay", c.weight_decay, "AdamW decoupled weight decay");
+  v.field("grad_clip", c.grad_clip, "largest global gradient norm; 0 = no clipping");
 }
 
 LearningRateSchedule::LearningRateSchedule(const OptimizerConfig& config, int64_t total_steps)

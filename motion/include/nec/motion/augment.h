@@ -19,6 +19,10 @@
 namespace nec {
 
 enum class AugmentKind { RestPose, BoneLength, JointRemoval, Subdivision };
+// The names `nec augment --kind` and training configs use: "rest", "length", "remove", "subdivide".
+std::string to_string(AugmentKind kind);
+// Throws std::invalid_argument naming the known kinds.
+AugmentKind augment_kind_from_string(const std::string& name);
 
 // A random frame becomes the rest pose; offsets and rotations are recomputed
 // so FK positions of every joint are unchanged.

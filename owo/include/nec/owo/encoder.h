@@ -47,6 +47,7 @@ struct OwoConfig {
   void validate() const;
   std::string to_string() const;
 };
+void visit_fields(train::ConfigVisitor& v, OwoConfig& c);  // train/config_fields.h
 
 struct OwoOutput {
   at::Tensor joints;       // (B, J, D) per-joint embeddings, zero at padding

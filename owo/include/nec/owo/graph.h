@@ -20,6 +20,10 @@
 #include <cstdint>
 #include <vector>
 
+namespace nec::train {
+class ConfigVisitor;
+}
+
 namespace nec::owo {
 
 // Featurization settings; saved with a model (they fix the input widths).
@@ -33,6 +37,7 @@ struct GraphOptions {
   // Throws std::invalid_argument naming the first bad field.
   void validate() const;
 };
+void visit_fields(train::ConfigVisitor& v, GraphOptions& c);  // train/config_fields.h
 
 // Relation of joint i to joint j, one-hot in the edge features (in this order).
 enum class JointRelation : int { Self, Parent, Child, Ancestor, Descendant, Other };

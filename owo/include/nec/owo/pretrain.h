@@ -47,6 +47,7 @@ struct PretrainConfig {
   // Throws std::invalid_argument naming the first bad field.
   void validate() const;
 };
+void visit_fields(train::ConfigVisitor& v, PretrainConfig& c);  // train/config_fields.h
 
 struct PretrainLosses {
   double total = 0.0;                 // weighted sum of the terms that ran

@@ -27,6 +27,10 @@
 #include <string>
 #include <vector>
 
+namespace nec::train {
+class ConfigVisitor;
+}
+
 namespace nec::owo {
 
 struct PretrainSkeleton {
@@ -79,6 +83,7 @@ struct AugmentOptions {
   // Throws std::invalid_argument naming the first bad field.
   void validate() const;
 };
+void visit_fields(train::ConfigVisitor& v, AugmentOptions& c);  // train/config_fields.h
 
 struct AugmentedSkeleton {
   Skeleton skeleton;                         // valid, joints depth-first, root 0

@@ -21,6 +21,7 @@
 #include "nec/owo/pretrain.h"
 #include "nec/owo/skeleton_set.h"
 #include "nec/text/word_vectors.h"
+#include "nec/train/loop.h"
 #include "nec/train/optimizer.h"
 
 #include <c10/core/Device.h>
@@ -37,6 +38,7 @@ class AdamW;
 }
 namespace nec::train {
 class Communicator;
+class ConfigVisitor;
 }
 
 namespace nec::owo {
@@ -51,6 +53,7 @@ struct OwoDataConfig {
 
   void validate() const;
 };
+void visit_fields(train::ConfigVisitor& v, OwoDataConfig& c);  // train/config_fields.h
 
 // The encoder a training config starts from: OwoConfig's defaults with
 // name_dim 100, the width of the project's GloVe vectors (text/).
@@ -71,14 +74,16 @@ struct OwoTrainingConfig {
   int64_t batch_size = 16;       // skeletons per step at most, e.g. 16
   int64_t batch_joint_pairs = 0; // and at most this many B * Jmax^2 (a step's edge tensors); 0 = no limit
   int64_t steps = 2000;          // the step training ends at
-  int64_t log_every = 50;        // progress line cadence off a terminal
+  int64_t log_every = 50;        // progress line cadence off a terminal; 0 = only the last step
   int64_t validate_every = 500;  // held-out validation every N steps and at the end; 0 = never
-  int64_t checkpoint_every = 500;  // checkpoint every N steps; always at the end
+  int64_t checkpoint_every = 500;  // checkpoint every N steps and at the end; 0 = only at the end
   uint64_t seed = 1;             // model init, batches, augmentation, sampled pairs
 
   void validate() const;  // throws std::invalid_argument naming the field, e.g. "optimizer.learning_rate must be ..."
   HoldOut hold_out() const { return HoldOut{data.held_out, data.cache_held_out}; }
 };
+// The one field list of the config file: `nec train owo --help` prints it.
+void visit_fields(train::ConfigVisitor& v, OwoTrainingConfig& c);
 
 // Parses a config file's text; `file` names it in errors. Throws nec::InputError
 // "file: field 'optimizer.learning_rate' must be a number" (also for unknown fields, bad
@@ -144,6 +149,14 @@ class OwoTrainer {
   // returns its step. Throws nec::InputError naming the file when it is not
   // one, or when its config (differing_fields) or training skeletons differ.
   int64_t resume(const std::string& dir);
+
+  // What `nec train owo` runs: the config's step cadence (no validation
+  // without held-out skeletons), and hooks whose progress terms are "total",
+  // each loss that ran, "lca_acc" and "grad"; validation on the held-out
+  // skeletons "held_out_lca_acc", "offset_pct", "rebuilt", "decoded";
+  // checkpoints to `out_dir` recording `data`.
+  train::TrainingSchedule loop_schedule() const;
+  train::TrainingHooks hooks(const std::string& out_dir, const std::vector<std::string>& data);
 
   OwoPretrainerImpl& model() { return *model_; }
   const SkeletonSet& skeletons() const { return skeletons_; }

@@ -54,9 +54,4 @@ void save_tat_checkpoint(const std::string& dir, TokenizerImpl& tokenizer, owo::
 // foreign, other-version, damaged or mismatched checkpoint.
 LoadedTatCheckpoint load_tat_checkpoint(const std::string& dir);
 
-// TatConfig <-> JSON (the "tokenizer" object); from_json throws InputError via
-// `file` naming the bad field. Also used for training config files.
-nlohmann::json to_json(const TatConfig& config);
-TatConfig tat_config_from_json(const nlohmann::json& object, const std::string& file, const std::string& where);
-
 }  // namespace nec::tat

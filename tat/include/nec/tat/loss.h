@@ -7,6 +7,10 @@
 
 #include "nec/tat/batch_tensors.h"
 
+namespace nec::train {
+class ConfigVisitor;
+}
+
 namespace nec::tat {
 
 struct LossWeights {
@@ -18,6 +22,7 @@ struct LossWeights {
   // Throws std::invalid_argument naming the first negative weight.
   void validate() const;
 };
+void visit_fields(train::ConfigVisitor& v, LossWeights& c);  // train/config_fields.h
 
 struct ReconstructionLoss {
   at::Tensor total;  // weighted sum + commitment, differentiable

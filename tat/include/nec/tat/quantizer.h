@@ -28,6 +28,7 @@
 
 namespace nec::train {
 class Communicator;
+class ConfigVisitor;
 }
 
 namespace nec::tat {
@@ -44,6 +45,7 @@ struct QuantizerConfig {
   // Throws std::invalid_argument naming the first bad field.
   void validate() const;
 };
+void visit_fields(train::ConfigVisitor& v, QuantizerConfig& c);  // train/config_fields.h
 
 struct QuantizerOutput {
   at::Tensor quantized;        // (N, C) sum of the chosen codes; straight-through gradient to the latent

@@ -68,6 +68,7 @@ struct TatConfig {
   // One line with every field, e.g. for logs and checkpoint reports.
   std::string to_string() const;
 };
+void visit_fields(train::ConfigVisitor& v, TatConfig& c);  // train/config_fields.h
 
 struct TokenizerOutput {
   at::Tensor reconstruction;   // (B, T, J, 9)

@@ -25,6 +25,7 @@
 #include "nec/tat/metrics.h"
 #include "nec/tat/tokenizer.h"
 #include "nec/text/word_vectors.h"
+#include "nec/train/loop.h"
 #include "nec/train/optimizer.h"
 
 #include <nlohmann/json.hpp>
@@ -38,6 +39,7 @@
 
 namespace nec::train {
 class Communicator;
+class ConfigVisitor;
 }
 
 namespace nec::tat {
@@ -53,15 +55,28 @@ inline train::OptimizerConfig default_tat_optimizer() {
   return config;
 }
 
+// Rig augmentation of the training clips (motion/augment.h).
+struct ClipAugmentConfig {
+  double probability = 0.5;  // chance that an item's rig is augmented
+  std::vector<std::string> kinds{"rest", "length", "remove", "subdivide"};  // one drawn uniformly per augmented item
+};
+void visit_fields(train::ConfigVisitor& v, ClipAugmentConfig& c);
+
+// How the training batches are cut from the cache.
+struct TatDataConfig {
+  int64_t window_frames = 64;  // training crop T; a multiple of the downsampling
+  int64_t joint_buckets = 16;  // batches of similar joint counts (BatchOptions::joint_buckets); 0 = off
+  ClipAugmentConfig augment;
+};
+void visit_fields(train::ConfigVisitor& v, TatDataConfig& c);
+
 struct TatTrainConfig {
   TatConfig model;
   LossWeights loss;
   train::OptimizerConfig optimizer = default_tat_optimizer();  // AdamW, warm-up + cosine
+  TatDataConfig data;
   int64_t steps = 4000;              // the step training ends at
   int64_t batch_size = 32;           // clips per step over all ranks, e.g. 32
-  int64_t window_frames = 64;        // training crop T; a multiple of the downsampling
-  double augment_probability = 0.5;  // rig augmentation per item
-  int64_t joint_buckets = 16;        // batches of similar joint counts (BatchOptions::joint_buckets); 0 = off
   int64_t max_joint_frames = 0;      // most B × J × T entries per forward/backward pass; a bigger batch is run
                                      // in parts whose gradients add up (less memory, same update); 0 = no limit
   int64_t log_every = 20;            // progress line cadence off a terminal; 0 = only the last step
@@ -73,11 +88,12 @@ struct TatTrainConfig {
   // Throws std::invalid_argument naming the first bad field.
   void validate() const;
 };
+// The one field list of the config file: `nec train tat --help` prints it.
+void visit_fields(train::ConfigVisitor& v, TatTrainConfig& c);
 
 // Every field optional (defaults above); unknown fields are an error so typos
 // do not pass silently. Throws nec::InputError naming the file and the field.
 TatTrainConfig read_tat_train_config(const std::string& path);
-nlohmann::json to_json(const TatTrainConfig& config);
 TatTrainConfig tat_train_config_from_json(const nlohmann::json& object, const std::string& file);
 
 // Loss terms of one batch ("loss", "rotation", "root", "position", "velocity",
@@ -127,6 +143,13 @@ class TatTrainer {
   std::optional<ReconstructionMetrics> validate();
   // Writes the training checkpoint at `step` to `dir` (atomic, replacing one there).
   void save(const std::string& dir, int64_t step);
+
+  // What `nec train tat` runs: the config's step cadence (no validation
+  // without a val split), and hooks whose progress terms are "loss", the
+  // reconstruction terms, "ppl<r>" per layer and "lr"; validation
+  // "val_mpjpe", "val_mpjpe_no_trans", "val_geodesic_deg"; checkpoints to `out_dir`.
+  train::TrainingSchedule loop_schedule() const;
+  train::TrainingHooks hooks(const std::string& out_dir);
 
   // One step / metrics on a given batch (what step() and validate() run).
   LossTerms step_on(const Batch& batch, int64_t step);

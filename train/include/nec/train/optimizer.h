@@ -34,6 +34,7 @@ class Optimizer;
 namespace nec::train {
 
 class Communicator;
+class ConfigVisitor;
 
 struct OptimizerConfig {
   double learning_rate = 1e-3;     // peak rate after warm-up, e.g. 1e-3 (small CPU models), 2e-4 (paper size)
@@ -45,6 +46,8 @@ struct OptimizerConfig {
   // Throws std::invalid_argument naming the field, e.g. "learning_rate must be a positive number".
   void validate() const;
 };
+// The field list of an "optimizer" object (config_fields.h).
+void visit_fields(ConfigVisitor& v, OptimizerConfig& c);
 
 // The learning rate of every step of a run. A run resumed with a new end
 // (`--resume --steps N`) does not jump: from the step it resumes at, the rate
