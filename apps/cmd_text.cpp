@@ -206,11 +206,13 @@ constexpr TextCommand kTextCommands[] = {
     {"embed", run_embed, "nearest words to the mean vector of some words (or of a joint name)"},
     {"similar", run_similar, "cosine similarity matrix of joint-name embeddings"},
     {"subset", run_subset, "the vectors of the words a corpus's joint names use, in a small file"},
+    {"train-tokenizer", run_train_tokenizer, "train the caption piece model (sentencepiece) on a corpus's captions"},
+    {"pieces", run_pieces, "a caption's normalized text, pieces and ids"},
 };
 
 void print_text_overview() {
-  fmt::print("usage: nec text COMMAND [arguments] [options]\n\nWord vectors and joint-name embeddings.\n\ncommands:\n");
-  for (const TextCommand& c : kTextCommands) fmt::print("  {:<13} {}\n", c.name, c.summary);
+  fmt::print("usage: nec text COMMAND [arguments] [options]\n\nWord vectors, joint-name embeddings and caption pieces.\n\ncommands:\n");
+  for (const TextCommand& c : kTextCommands) fmt::print("  {:<16} {}\n", c.name, c.summary);
   fmt::print("\n{}\n\n`nec text COMMAND --help` shows a command's arguments and defaults.\n", kWhereVectorsLive);
 }
 
@@ -224,7 +226,7 @@ int run_text(int argc, char** argv) {
   for (const TextCommand& c : kTextCommands) {
     if (std::strcmp(argv[0], c.name) == 0) return c.run(argc - 1, argv + 1);
   }
-  throw UsageError(std::string("unknown text command '") + argv[0] + "' (known: import-glove, embed, similar, subset)");
+  throw UsageError(std::string("unknown text command '") + argv[0] + "' (known: import-glove, embed, similar, subset, train-tokenizer, pieces)");
 }
 
 }  // namespace nec::app

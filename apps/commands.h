@@ -13,6 +13,8 @@ int run_view(int argc, char** argv);
 int run_zoo(int argc, char** argv);
 int run_demo(int argc, char** argv);
 int run_text(int argc, char** argv);
+int run_train_tokenizer(int argc, char** argv);  // nec text train-tokenizer
+int run_pieces(int argc, char** argv);           // nec text pieces
 int run_train(int argc, char** argv);      // nec train MODEL ...: dispatches to run_train_<model>
 int run_train_owo(int argc, char** argv);  // nec train owo
 int run_eval(int argc, char** argv);       // nec eval MODEL ...: dispatches to run_eval_<model>

@@ -196,6 +196,29 @@ TEST_F(CliTrain, BadInputNamesTheProblemAndWritesNothing) {
 
 // `nec text subset`: a small vector file that embeds the corpus's joint names
 // exactly as the full file does, without the words no joint uses.
+TEST_F(CliTrain, TextTrainTokenizerReadsTheCorpusCaptionsAndNeverOverwrites) {
+  const std::string model = path("spm.model");
+  const CommandResult trained = run_nec("text train-tokenizer --data " + cache() + " -o " + model + " --vocab-size 200");
+  ASSERT_EQ(trained.exit_code, 0) << trained.output;
+  EXPECT_TRUE(contains(trained.output, "pieces (bpe) from")) << trained.output;
+  EXPECT_TRUE(contains(trained.output, "of the train split")) << trained.output;
+  const CommandResult again = run_nec("text train-tokenizer --data " + cache() + " -o " + model);
+  EXPECT_EQ(again.exit_code, 1);
+  EXPECT_TRUE(contains(again.output, "exists; pass --force to replace it")) << again.output;
+  EXPECT_EQ(run_nec("text train-tokenizer --data " + cache() + " -o " + model + " --force").exit_code, 0);
+
+  const CommandResult pieces = run_nec("text pieces \"A Spider, 2 legs!\" --model " + model);
+  ASSERT_EQ(pieces.exit_code, 0) << pieces.output;
+  EXPECT_TRUE(contains(pieces.output, "normalized  a spider two legs")) << pieces.output;
+  EXPECT_TRUE(contains(pieces.output, "decoded     a spider two legs")) << pieces.output;
+  const CommandResult empty = run_nec("text pieces \"\" --model " + model);
+  EXPECT_EQ(empty.exit_code, 1);
+  EXPECT_TRUE(contains(empty.output, "CAPTION: the caption is empty")) << empty.output;
+  const CommandResult no_model = run_nec("text pieces \"a dog\" --model " + path("none.model"));
+  EXPECT_EQ(no_model.exit_code, 1);
+  EXPECT_TRUE(contains(no_model.output, "no such piece model")) << no_model.output;
+}
+
 TEST_F(CliTrain, TextSubsetEmbedsTheCorpusNamesLikeTheFullFile) {
   const std::vector<std::string> words = {"left", "right", "leg", "upper", "head", "neck", "spine", "tail", "banana"};
   std::vector<float> rows;
