@@ -62,7 +62,6 @@ void visit_fields(train::ConfigVisitor& v, OwoDataConfig& c) {
 }
 
 void visit_fields(train::ConfigVisitor& v, OwoTrainingConfig& c) {
-  using train::OnResume;
   v.object("encoder", c.encoder, "the OwO graph encoder (saved with the model)");
   v.object("pretrain", c.pretrain, "the self-supervised losses (saved with the model)");
   v.object("optimizer", c.optimizer, "AdamW, warm-up then cosine decay");
@@ -70,11 +69,7 @@ void visit_fields(train::ConfigVisitor& v, OwoTrainingConfig& c) {
   v.field("names", c.names, "feed joint-name word vectors (encoder.name_dim = their width)");
   v.field("batch_size", c.batch_size, "skeletons per step at most");
   v.field("batch_joint_pairs", c.batch_joint_pairs, "and at most this many B x Jmax^2 per step; 0 = no limit");
-  v.field("steps", c.steps, "the step training ends at", OnResume::kMayChange);
-  v.field("log_every", c.log_every, "progress line every N steps off a terminal; 0 = only the last", OnResume::kMayChange);
-  v.field("validate_every", c.validate_every, "held-out validation every N steps and at the end; 0 = never",
-          OnResume::kMayChange);
-  v.field("checkpoint_every", c.checkpoint_every, "checkpoint every N steps; 0 = only at the end", OnResume::kMayChange);
+  train::visit_cadence_fields(v, c.steps, c.log_every, c.validate_every, c.checkpoint_every);
   v.field("seed", c.seed, "initial weights, batches, augmentation and sampled pairs");
 }
 
@@ -347,12 +342,8 @@ std::string OwoTrainer::describe_data(const std::vector<std::string>& data) cons
 }
 
 train::TrainingSchedule OwoTrainer::loop_schedule() const {
-  train::TrainingSchedule schedule;
-  schedule.total_steps = config_.steps;
-  schedule.log_every = config_.log_every;
-  schedule.validate_every = skeletons_.held_out.empty() ? 0 : config_.validate_every;
-  schedule.checkpoint_every = config_.checkpoint_every;
-  return schedule;
+  return {config_.steps, config_.log_every, skeletons_.held_out.empty() ? 0 : config_.validate_every,
+          config_.checkpoint_every};
 }
 
 train::TrainingHooks OwoTrainer::hooks(const std::string& out_dir, const std::vector<std::string>& data) {

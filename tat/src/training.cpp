@@ -77,20 +77,15 @@ void visit_fields(train::ConfigVisitor& v, TatDataConfig& c) {
 }
 
 void visit_fields(train::ConfigVisitor& v, TatTrainConfig& c) {
-  using train::OnResume;
   v.object("model", c.model, "the tokenizer");
   v.object("loss", c.loss, "weights of the reconstruction terms");
   v.object("optimizer", c.optimizer, "AdamW, warm-up then cosine decay");
   v.object("data", c.data, "how batches are cut from the cache");
-  v.field("steps", c.steps, "the step training ends at", OnResume::kMayChange);
   v.field("batch_size", c.batch_size, "clips per step over all processes");
   v.field("max_joint_frames", c.max_joint_frames,
           "most B x J x T entries per forward pass; bigger batches run in parts (same update); 0 = no limit");
-  v.field("log_every", c.log_every, "progress line every N steps off a terminal; 0 = only the last", OnResume::kMayChange);
-  v.field("validate_every", c.validate_every, "validation every N steps and at the end; 0 = never", OnResume::kMayChange);
   v.field("validation_batches", c.validation_batches, "batches of the val split per validation");
-  v.field("checkpoint_every", c.checkpoint_every, "checkpoint every N steps and at the end; 0 = only at the end",
-          OnResume::kMayChange);
+  train::visit_cadence_fields(v, c.steps, c.log_every, c.validate_every, c.checkpoint_every);
   v.field("seed", c.seed, "initial weights, batches and every step's random draws");
 }
 
@@ -266,12 +261,7 @@ std::optional<ReconstructionMetrics> TatTrainer::validate() {
 }
 
 train::TrainingSchedule TatTrainer::loop_schedule() const {
-  train::TrainingSchedule schedule;
-  schedule.total_steps = config_.steps;
-  schedule.log_every = config_.log_every;
-  schedule.validate_every = has_validation() ? config_.validate_every : 0;
-  schedule.checkpoint_every = config_.checkpoint_every;
-  return schedule;
+  return {config_.steps, config_.log_every, has_validation() ? config_.validate_every : 0, config_.checkpoint_every};
 }
 
 train::TrainingHooks TatTrainer::hooks(const std::string& out_dir) {

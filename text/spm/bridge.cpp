@@ -44,17 +44,17 @@ int fail(const std::string& message, char* error, size_t error_size) {
 // itself gets copies of them (copy relocations), which are the ones libstdc++
 // constructs: its own stay raw memory, and sentencepiece's first log line
 // would crash. Each raw one becomes a stream on the program's buffer.
-void adopt_program_stream(std::ostream& own, const char* symbol) {
-  void* main_program = dlopen(nullptr, RTLD_NOW);  // the program first, then what it loaded
+void adopt_program_stream(void* main_program, std::ostream& own, const char* symbol) {
   auto* program = static_cast<std::ostream*>(dlsym(main_program, symbol));
   if (program == nullptr || program == &own) return;
   new (&own) std::ostream(program->rdbuf());
 }
 
 __attribute__((constructor)) void adopt_program_streams() {
-  adopt_program_stream(std::cout, "_ZSt4cout");
-  adopt_program_stream(std::cerr, "_ZSt4cerr");
-  adopt_program_stream(std::clog, "_ZSt4clog");
+  void* main_program = dlopen(nullptr, RTLD_NOW);  // looks in the program first, then in what it loaded
+  adopt_program_stream(main_program, std::cout, "_ZSt4cout");
+  adopt_program_stream(main_program, std::cerr, "_ZSt4cerr");
+  adopt_program_stream(main_program, std::clog, "_ZSt4clog");
 }
 
 }  // namespace

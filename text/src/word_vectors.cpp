@@ -2,6 +2,8 @@
 // validation, lookups, fallback vectors, joint-name embeddings, nearest words.
 #include "nec/text/word_vectors.h"
 
+#include "nec/text/caption_text.h"
+
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/motion/names.h"
@@ -83,16 +85,7 @@ std::string default_word_vectors_path() {
 }
 
 std::vector<std::string> canonical_words(std::string_view joint_name) {
-  std::vector<std::string> words;
-  const std::string canonical = canonical_joint_name(joint_name);
-  size_t start = 0;
-  while (start < canonical.size()) {
-    size_t end = canonical.find(' ', start);
-    if (end == std::string::npos) end = canonical.size();
-    if (end > start) words.push_back(canonical.substr(start, end - start));
-    start = end + 1;
-  }
-  return words;
+  return caption_words(canonical_joint_name(joint_name));
 }
 
 Vector fallback_vector(std::string_view word, int dim) {

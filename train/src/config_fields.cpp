@@ -147,36 +147,39 @@ void JsonConfigWriter::leave() {
   names_.pop_back();
 }
 
-void MayChangeCollector::visit(const FieldInfo& info, FieldValue) {
-  if (info.on_resume == OnResume::kMayChange) names_.insert(prefix_ + info.name);
-}
-
-void MayChangeCollector::enter(const char* name, const char*) {
+void DottedVisitor::enter(const char* name, const char*) {
   lengths_.push_back(prefix_.size());
   prefix_ += std::string(name) + ".";
 }
 
-void MayChangeCollector::leave() {
+void DottedVisitor::leave() {
   prefix_.resize(lengths_.back());
   lengths_.pop_back();
+}
+
+void MayChangeCollector::visit(const FieldInfo& info, FieldValue) {
+  if (info.on_resume == OnResume::kMayChange) names_.insert(prefix() + info.name);
 }
 
 void HelpWriter::visit(const FieldInfo& info, FieldValue value) {
   std::string help = info.help;
   if (info.choices) help += " (" + joined(*info.choices) + ")";
   if (info.on_resume == OnResume::kMayChange) help += "; may change on --resume";
-  lines_.emplace_back(prefix_ + info.name + " = " + value_as_json(value).dump(), help);
+  lines_.emplace_back(prefix() + info.name + " = " + value_as_json(value).dump(), help);
 }
 
 void HelpWriter::enter(const char* name, const char* help) {
-  lines_.emplace_back(prefix_ + name + ".", help);
-  lengths_.push_back(prefix_.size());
-  prefix_ += std::string(name) + ".";
+  lines_.emplace_back(prefix() + name + ".", help);
+  DottedVisitor::enter(name, help);
 }
 
-void HelpWriter::leave() {
-  prefix_.resize(lengths_.back());
-  lengths_.pop_back();
+void visit_cadence_fields(ConfigVisitor& v, int64_t& steps, int64_t& log_every, int64_t& validate_every,
+                          int64_t& checkpoint_every) {
+  v.field("steps", steps, "the step training ends at", OnResume::kMayChange);
+  v.field("log_every", log_every, "progress line every N steps off a terminal; 0 = only the last", OnResume::kMayChange);
+  v.field("validate_every", validate_every, "validation every N steps and at the end; 0 = never", OnResume::kMayChange);
+  v.field("checkpoint_every", checkpoint_every, "checkpoint every N steps and at the end; 0 = only at the end",
+          OnResume::kMayChange);
 }
 
 std::string HelpWriter::result() const {

@@ -22,7 +22,7 @@ std::string normalize_caption(std::string_view caption);
 // "the caption is empty") or "... has no letters: '<caption>'".
 std::string checked_caption(std::string_view caption, const std::string& where);
 
-// The words of a normalized caption (split on its spaces).
+// The words of a normalized caption, or of any text: split on spaces, no empty words.
 std::vector<std::string> caption_words(std::string_view normalized);
 
 }  // namespace nec::text

@@ -127,37 +127,48 @@ class JsonConfigWriter final : public ConfigVisitor {
   std::vector<std::string> names_;
 };
 
+// A visitor that knows the dotted prefix of the object it is in, e.g. "data.augment.".
+class DottedVisitor : public ConfigVisitor {
+ protected:
+  void enter(const char* name, const char* help) override;
+  void leave() override;
+  const std::string& prefix() const { return prefix_; }
+
+ private:
+  std::string prefix_;
+  std::vector<size_t> lengths_;
+};
+
 // Dotted names of the fields marked OnResume::kMayChange.
-class MayChangeCollector final : public ConfigVisitor {
+class MayChangeCollector final : public DottedVisitor {
  public:
   const std::set<std::string>& result() const { return names_; }
 
  protected:
   void visit(const FieldInfo& info, FieldValue value) override;
-  void enter(const char* name, const char* help) override;
-  void leave() override;
 
  private:
-  std::string prefix_;
-  std::vector<size_t> lengths_;
   std::set<std::string> names_;
 };
 
 // One line per field: dotted name, its value in the visited config, help.
-class HelpWriter final : public ConfigVisitor {
+class HelpWriter final : public DottedVisitor {
  public:
   std::string result() const;
 
  protected:
   void visit(const FieldInfo& info, FieldValue value) override;
   void enter(const char* name, const char* help) override;
-  void leave() override;
 
  private:
-  std::string prefix_;
-  std::vector<size_t> lengths_;
   std::vector<std::pair<std::string, std::string>> lines_;  // "name = value", help
 };
+
+// The cadence every training config has, one list for all of them: "steps",
+// "log_every", "validate_every", "checkpoint_every" (0: only at the end;
+// validation: never), each one a resumed run may change.
+void visit_cadence_fields(ConfigVisitor& v, int64_t& steps, int64_t& log_every, int64_t& validate_every,
+                          int64_t& checkpoint_every);
 
 // Reads `root` into a default-constructed Config (validation is the caller's).
 template <typename Config>
