@@ -45,7 +45,7 @@ void visit_fields(ConfigVisitor& v, OptimizerConfig& c) {
 }
 
 LearningRateSchedule::LearningRateSchedule(const OptimizerConfig& config, int64_t total_steps)
-    : config_(config), first_total_steps_(total_steps), base_end_(total_steps), total_steps_(total_steps) {
+    : config_(config), first_total_steps_(total_steps), base_end_(total_steps) {
   config_.validate();
   require(total_steps >= 1, "a training run needs total_steps >= 1, got " + std::to_string(total_steps));
 }
@@ -73,7 +73,6 @@ void LearningRateSchedule::change_end(int64_t step, int64_t total_steps) {
   } else {
     base_end_ = total_steps;  // still warming up: the decay has not begun, only its end moves
   }
-  total_steps_ = total_steps;
 }
 
 nlohmann::json LearningRateSchedule::to_json() const {

@@ -60,7 +60,8 @@ class LearningRateSchedule {
 
   // The rate of step `step` (1-based); past the end: the final rate.
   double at(int64_t step) const;
-  int64_t total_steps() const { return total_steps_; }
+  // The end now: the last end change's, else the one the run began with.
+  int64_t total_steps() const { return end_changes_.empty() ? first_total_steps_ : end_changes_.back().second; }
   // From `step` on, the run ends at `total_steps` (> step). Throws std::invalid_argument otherwise.
   void change_end(int64_t step, int64_t total_steps);
 
@@ -84,9 +85,8 @@ class LearningRateSchedule {
   OptimizerConfig config_;
   int64_t first_total_steps_ = 0;  // the end the run began with
   int64_t base_end_ = 0;           // the end of the first cosine
-  int64_t total_steps_ = 0;        // the end now
   std::vector<Segment> segments_;  // decays after end changes, in step order
-  std::vector<std::pair<int64_t, int64_t>> end_changes_;
+  std::vector<std::pair<int64_t, int64_t>> end_changes_;  // (step, new end), in step order
 };
 
 // AdamW over `parameters` with the config's peak rate and weight decay.
