@@ -6,6 +6,7 @@
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "test_support.h"
+#include "text_support.h"
 
 #include <gtest/gtest.h>
 #include <torch/torch.h>
@@ -46,18 +47,7 @@ TEST(CaptionText, EmptyCaptionsAndCaptionsWithoutLettersAreRefused) {
   EXPECT_EQ(checked_caption("Run!", "query"), "run");
 }
 
-// Captions like the zoo's: creature, verb, direction, speed.
-std::vector<std::string> corpus() {
-  std::vector<std::string> out;
-  for (const char* creature : {"dog", "spider", "snake", "person", "bird", "horse"}) {
-    for (const char* verb : {"walks", "runs", "trots", "crawls", "turns", "jumps"}) {
-      for (const char* how : {"forward", "to the left", "to the right", "slowly", "quickly in a circle"}) {
-        out.push_back(std::string("a ") + creature + " " + verb + " " + how);
-      }
-    }
-  }
-  return out;
-}
+using testing::caption_corpus;
 
 class CaptionPieces : public testing::SharedFolderTest {};
 
@@ -69,13 +59,13 @@ TEST_F(CaptionPieces, TrainAndEncodeInsideAProcessThatRunsTorch) {
   const std::string model_path = path("spm.model");
   text::PieceTrainOptions options;
   options.vocab_size = 120;
-  text::train_piece_model(corpus(), options, model_path);
+  text::train_piece_model(caption_corpus(), options, model_path);
   const text::PieceModel model = text::PieceModel::load(model_path);
   EXPECT_GT(model.vocab_size(), 20);
   EXPECT_LE(model.vocab_size(), 120);
   EXPECT_EQ(model.piece(text::kPadPiece), "<pad>");
   EXPECT_EQ(model.piece(text::kUnknownPiece), "<unk>");
-  for (const std::string& caption : corpus()) {
+  for (const std::string& caption : caption_corpus()) {
     const std::vector<int> ids = model.encode(caption);
     ASSERT_FALSE(ids.empty()) << caption;
     EXPECT_EQ(model.decode(ids), caption);
@@ -95,7 +85,7 @@ TEST_F(CaptionPieces, TrainAndEncodeInsideAProcessThatRunsTorch) {
 
   // The same captions give the same pieces in the same order.
   const std::string again = path("spm_again.model");
-  text::train_piece_model(corpus(), options, again);
+  text::train_piece_model(caption_corpus(), options, again);
   const text::PieceModel second = text::PieceModel::load(again);
   ASSERT_EQ(second.vocab_size(), model.vocab_size());
   for (int id = 0; id < model.vocab_size(); ++id) EXPECT_EQ(second.piece(id), model.piece(id)) << id;
@@ -123,12 +113,12 @@ TEST_F(CaptionPieces, BadModelFilesAndIdsGetClearErrors) {
   EXPECT_THROW(text::train_piece_model({}, {}, path("empty.model")), InputError);
   text::PieceTrainOptions options;
   options.vocab_size = 100;
-  text::train_piece_model(corpus(), options, path("ok.model"));
+  text::train_piece_model(caption_corpus(), options, path("ok.model"));
   const text::PieceModel model = text::PieceModel::load(path("ok.model"));
   EXPECT_THROW(model.decode({model.vocab_size()}), std::invalid_argument);
   EXPECT_THROW(model.piece(-1), std::invalid_argument);
   options.model_type = "wordpiece";
-  EXPECT_THROW(text::train_piece_model(corpus(), options, path("x.model")), std::invalid_argument);
+  EXPECT_THROW(text::train_piece_model(caption_corpus(), options, path("x.model")), std::invalid_argument);
 }
 
 }  // namespace

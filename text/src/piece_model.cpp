@@ -3,6 +3,8 @@
 
 #include "../spm/bridge.h"
 
+#include "nec/text/caption_text.h"
+
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 
@@ -242,5 +244,24 @@ const std::string& PieceModel::piece(int id) const {
 }
 
 bool PieceModel::starts_word(int id) const { return piece(id).rfind(kWordStart, 0) == 0; }
+
+std::string PieceModel::piece_text(int id) const {
+  const std::string& bytes = piece(id);
+  return starts_word(id) ? bytes.substr(std::string_view(kWordStart).size()) : bytes;
+}
+
+CaptionPieces PieceModel::split(std::string_view normalized) const {
+  CaptionPieces out;
+  out.ids = encode(normalized);
+  std::vector<std::string> joined;
+  for (const int id : out.ids) {
+    if (joined.empty() || starts_word(id)) joined.emplace_back();
+    if (id != kUnknownPiece) joined.back() += piece_text(id);
+    out.word_of_piece.push_back(static_cast<int>(joined.size()) - 1);
+  }
+  std::vector<std::string> words = caption_words(normalized);
+  out.words = words.size() == joined.size() ? std::move(words) : std::move(joined);
+  return out;
+}
 
 }  // namespace nec::text

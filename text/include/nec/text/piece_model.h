@@ -41,6 +41,14 @@ struct PieceTrainOptions {
 // the model to `out_path` atomically. Throws InputError(out_path, ...) when
 // sentencepiece refuses (e.g. no sentences) and std::runtime_error when the
 // bridge library cannot be opened.
+// A caption cut into pieces, each knowing the word it belongs to (what the
+// text encoder reads: a word's vector goes with each of its pieces).
+struct CaptionPieces {
+  std::vector<int> ids;            // (P) piece ids
+  std::vector<int> word_of_piece;  // (P) index into words
+  std::vector<std::string> words;  // the caption's words in order, e.g. {"a", "dog", "scuttles"}
+};
+
 void train_piece_model(const std::vector<std::string>& sentences, const PieceTrainOptions& options,
                        const std::string& out_path);
 
@@ -62,6 +70,13 @@ class PieceModel {
   const std::string& piece(int id) const;
   // The piece begins a word (its bytes start with "▁").
   bool starts_word(int id) const;
+  // The piece without its word-start mark, e.g. "▁dog" -> "dog", "tles" -> "tles".
+  std::string piece_text(int id) const;
+  // encode(normalized) with the word of every piece: a word starts at each
+  // piece that starts_word (or at the first piece). The words are the
+  // caption's own (caption_words) when the counts agree, else the pieces'
+  // texts joined, an unknown piece adding nothing.
+  CaptionPieces split(std::string_view normalized) const;
 
  private:
   struct Handle;

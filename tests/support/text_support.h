@@ -1,0 +1,23 @@
+// Helpers of the tests that read captions: a small caption corpus, a piece
+// model trained on it, and hand-made word vectors with a known geometry.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace nec::testing {
+
+// Captions like the zoo's: "a <creature> <verb> <how>" over 6 creatures,
+// 6 verbs and 5 ways (180 captions).
+std::vector<std::string> caption_corpus();
+
+// Trains a BPE piece model on caption_corpus() (at most `vocab_size` pieces) to `path`.
+void train_corpus_piece_model(const std::string& path, int vocab_size = 120);
+
+// Word vectors of width `dim` (>= 8) for every word of caption_corpus() and a
+// few words it never uses: "hound" lies close to "dog" (cosine > 0.95),
+// "sprints" to "runs", "scuttles" to "crawls"; the corpus words are nearly
+// orthogonal to one another. Written with text::write_word_vectors to `path`.
+void write_corpus_word_vectors(const std::string& path, int dim = 16);
+
+}  // namespace nec::testing
