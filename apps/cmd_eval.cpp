@@ -8,7 +8,8 @@ int run_eval(int argc, char** argv) {
   return run_nested("nec eval NAME [arguments] [options]", "evaluations", "evaluation",
                     {{"owo", run_eval_owo, "OwO skeleton encoder on skeletons it never saw: LCA accuracy, offsets, tree rebuild"},
                      {"recon", run_eval_recon, "tokenizer reconstruction error on clips it never trained on"},
-                     {"transfer", run_eval_transfer, "transferred clips against their sources: speed, heading, feet, bones"}},
+                     {"transfer", run_eval_transfer, "transferred clips against their sources: speed, heading, feet, bones"},
+                     {"retrieval", run_eval_retrieval, "evaluator R-Precision: mixed, within plan, creature words masked, floor"}},
                     argc, argv);
 }
 

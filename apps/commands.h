@@ -23,7 +23,10 @@ int run_encode(int argc, char** argv);
 int run_decode(int argc, char** argv);
 int run_transfer(int argc, char** argv);
 int run_train_tat(int argc, char** argv);
+int run_train_evaluator(int argc, char** argv);  // nec train evaluator
 int run_eval_recon(int argc, char** argv);
 int run_eval_transfer(int argc, char** argv);
+int run_eval_retrieval(int argc, char** argv);  // nec eval retrieval
+int run_retrieve(int argc, char** argv);        // nec retrieve
 
 }  // namespace nec::app

@@ -85,6 +85,17 @@ TEST_F(CliTrain, DispatchByModel) {
                             "optimizer.learning_rate = 0.0002"}) {
     EXPECT_TRUE(contains(tat_help.output, field)) << field << "\n" << tat_help.output;
   }
+  const CommandResult evaluator_help = run_nec("train evaluator --help");
+  EXPECT_EQ(evaluator_help.exit_code, 0);
+  for (const char* field : {"model.text.piece_dropout = 0.1", "model.motion.patch_frames = 4", "batch_size = 64",
+                            "optimizer.learning_rate = 0.0003", "OUT/best"}) {
+    EXPECT_TRUE(contains(evaluator_help.output, field)) << field << "\n" << evaluator_help.output;
+  }
+  const CommandResult no_pieces =
+      run_nec("train evaluator --config " + write("e.json", "{}") + " --data " + cache() + " --out " + path("e") + " --owo x");
+  EXPECT_EQ(no_pieces.exit_code, 2) << no_pieces.output;
+  EXPECT_TRUE(contains(no_pieces.output, "--owo OWO_CKPT and --pieces SPM are required unless --resume")) << no_pieces.output;
+  EXPECT_FALSE(std::filesystem::exists(path("e")));
   const CommandResult eval = run_nec("eval frob");
   EXPECT_EQ(eval.exit_code, 2);
   EXPECT_TRUE(contains(eval.output, "unknown evaluation 'frob' (known: owo")) << eval.output;

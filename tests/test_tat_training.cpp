@@ -10,6 +10,7 @@
 #include "nec/train/config_fields.h"
 #include "nec/zoo/creature.h"
 #include "nec/zoo/motion_synthesis.h"
+#include "tat_support.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
@@ -48,16 +49,6 @@ DatasetCache walk_cache() {
   return build_cache(entries, options);
 }
 
-owo::OwoPretrainer frozen_encoder() {
-  torch::manual_seed(3);
-  owo::OwoConfig encoder;
-  encoder.name_dim = 0;
-  encoder.dim = 16;
-  encoder.layers = 1;
-  encoder.heads = 2;
-  encoder.edge_dim = 8;
-  return owo::OwoPretrainer(encoder, owo::PretrainConfig{});
-}
 
 tat::TatTrainConfig decaying_config() {
   tat::TatTrainConfig config;
@@ -85,7 +76,7 @@ TEST(TatTrainer, AResumedRunTakesTheStepsOfOneThatNeverStopped) {
   testing::TempDir dir;
   const std::string checkpoint = dir / "tat";
 
-  tat::TatTrainer straight(config, cache, "walks", frozen_encoder(), nullptr, torch::kCPU);
+  tat::TatTrainer straight(config, cache, "walks", testing::tiny_frozen_owo(), nullptr, torch::kCPU);
   std::vector<tat::LossTerms> terms;
   for (int64_t step = 1; step <= 6; ++step) {
     terms.push_back(straight.step(step));
@@ -94,7 +85,7 @@ TEST(TatTrainer, AResumedRunTakesTheStepsOfOneThatNeverStopped) {
   // The rate decays: every step after warm-up runs slower than the one before.
   for (int64_t step = 3; step <= 6; ++step) EXPECT_LT(terms[step - 1].at("lr"), terms[step - 2].at("lr")) << step;
 
-  tat::TatTrainer resumed(config, cache, "walks", frozen_encoder(), nullptr, torch::kCPU);
+  tat::TatTrainer resumed(config, cache, "walks", testing::tiny_frozen_owo(), nullptr, torch::kCPU);
   ASSERT_EQ(resumed.resume(checkpoint), 3);
   double largest = 0.0;
   for (int64_t step = 4; step <= 6; ++step) {
@@ -121,14 +112,14 @@ TEST(TatTrainer, ALaterEndGoesOnFromTheRateItHadAndOtherConfigsAreRefused) {
   const tat::TatTrainConfig config = decaying_config();
   testing::TempDir dir;
   const std::string checkpoint = dir / "tat";
-  tat::TatTrainer first(config, cache, "walks", frozen_encoder(), nullptr, torch::kCPU);
+  tat::TatTrainer first(config, cache, "walks", testing::tiny_frozen_owo(), nullptr, torch::kCPU);
   double rate_at_4 = 0.0;
   for (int64_t step = 1; step <= 4; ++step) rate_at_4 = first.step(step).at("lr");
   first.save(checkpoint, 4);
 
   tat::TatTrainConfig longer = config;
   longer.steps = 20;  // --resume --steps 20
-  tat::TatTrainer resumed(longer, cache, "walks", frozen_encoder(), nullptr, torch::kCPU);
+  tat::TatTrainer resumed(longer, cache, "walks", testing::tiny_frozen_owo(), nullptr, torch::kCPU);
   ASSERT_EQ(resumed.resume(checkpoint), 4);
   const double rate_at_5 = resumed.step(5).at("lr");
   std::printf("rate at step 4 %.6g, at step 5 after moving the end from 6 to 20: %.6g (a fresh 20-step run: %.6g)\n",
@@ -139,7 +130,7 @@ TEST(TatTrainer, ALaterEndGoesOnFromTheRateItHadAndOtherConfigsAreRefused) {
 
   tat::TatTrainConfig changed = config;
   changed.optimizer.weight_decay = 0.5;
-  tat::TatTrainer other(changed, cache, "walks", frozen_encoder(), nullptr, torch::kCPU);
+  tat::TatTrainer other(changed, cache, "walks", testing::tiny_frozen_owo(), nullptr, torch::kCPU);
   try {
     other.resume(checkpoint);
     FAIL() << "resumed with another weight decay";
@@ -147,7 +138,7 @@ TEST(TatTrainer, ALaterEndGoesOnFromTheRateItHadAndOtherConfigsAreRefused) {
     EXPECT_NE(std::string(e.what()).find("'optimizer.weight_decay' (checkpoint 0.0, now 0.5)"), std::string::npos)
         << e.what();
   }
-  EXPECT_THROW(tat::TatTrainer(config, cache, "walks", frozen_encoder(), nullptr, torch::kCPU).resume(dir / "none"),
+  EXPECT_THROW(tat::TatTrainer(config, cache, "walks", testing::tiny_frozen_owo(), nullptr, torch::kCPU).resume(dir / "none"),
                InputError);
 }
 

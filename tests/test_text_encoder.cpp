@@ -19,18 +19,9 @@ using text::TextBatch;
 using text::TextEncoder;
 using text::TextEncoderConfig;
 
-class TextEncoderTest : public ::testing::Test {
+class TextEncoderTest : public testing::CorpusTextTest {
  protected:
-  static void SetUpTestSuite() {
-    folder_ = new testing::TempDir();
-    testing::train_corpus_piece_model(*folder_ / "spm.model");
-    testing::write_corpus_word_vectors(*folder_ / "words.bin", 16);
-  }
-  static void TearDownTestSuite() { delete folder_; }
-
-  TextEncoderTest()
-      : pieces_(text::PieceModel::load(*folder_ / "spm.model")),
-        vectors_(text::WordVectors::load(*folder_ / "words.bin")) {
+  TextEncoderTest() : pieces_(text::PieceModel::load(pieces_path())), vectors_(text::WordVectors::load(vectors_path())) {
     config_.vocab_size = pieces_.vocab_size();
     config_.word_dim = 16;
     config_.dim = 32;
@@ -48,12 +39,10 @@ class TextEncoderTest : public ::testing::Test {
     return "(no error)";
   }
 
-  static testing::TempDir* folder_;
   text::PieceModel pieces_;
   text::WordVectors vectors_;
   TextEncoderConfig config_;
 };
-testing::TempDir* TextEncoderTest::folder_ = nullptr;
 
 TEST_F(TextEncoderTest, EveryPieceCarriesTheVectorOfItsWord) {
   const TextBatch batch = text::make_text_batch({"A Hound scuttles!", "a dog walks forward"}, pieces_, &vectors_,

@@ -5,6 +5,7 @@
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
+#include "nec/motion/hash.h"
 #include "nec/motion/random.h"
 
 #include <nlohmann/json.hpp>
@@ -54,15 +55,6 @@ void swap_float_bytes(float* data, size_t count) {
     bits = byte_swap32(bits);
     std::memcpy(data + i, &bits, 4);
   }
-}
-
-// FNV-1a, 64 bit.
-uint64_t fnv1a(std::string_view bytes, uint64_t hash = 0xcbf29ce484222325ull) {
-  for (unsigned char c : bytes) {
-    hash ^= c;
-    hash *= 0x100000001b3ull;
-  }
-  return hash;
 }
 
 std::string hex16(uint64_t value) {
@@ -387,7 +379,7 @@ void check_fraction(double value, const char* name) {
 uint64_t source_rank(uint64_t seed, const std::string& key) {
   char seed_bytes[8];
   for (int i = 0; i < 8; ++i) seed_bytes[i] = static_cast<char>(seed >> (8 * i));
-  return mix64(fnv1a(key, fnv1a(std::string_view(seed_bytes, 8))));
+  return mix64(fnv1a64(key, fnv1a64(std::string_view(seed_bytes, 8))));
 }
 
 // The longest leading folder ("a/b/") of two folder paths that end with '/'.
@@ -732,7 +724,7 @@ DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOpti
       stored.name = base;
       for (int n = 2; skeleton_names.count(stored.name); ++n) stored.name = base + "-" + std::to_string(n);
       skeleton_names.insert(stored.name);
-      stored.hash = hex16(fnv1a(record));
+      stored.hash = hex16(fnv1a64(record));
       stored.skeleton = skeleton;
       stored.canonical_names = p.canonical_names;
       stored_index = static_cast<int>(cache.skeletons.size());
@@ -804,7 +796,7 @@ void save_cache(const DatasetCache& cache, const std::string& dir) {
       const std::string record = serialize_skeleton(stored.skeleton, stored.canonical_names);
       skeletons.push_back({{"index", s},
                            {"name", stored.name},
-                           {"hash", hex16(fnv1a(record))},
+                           {"hash", hex16(fnv1a64(record))},
                            {"joints", stored.skeleton.joint_count()},
                            {"byte_offset", skeleton_file.bytes().size()},
                            {"byte_size", record.size()}});
@@ -944,7 +936,7 @@ DatasetCache read_cache(const std::string& dir) {
       throw InputError(skeletons_path, 0, "skeleton " + std::to_string(s) + " lies outside the file" + kHint);
     }
     const std::string_view record(skeleton_data.data() + offset, size);
-    if (hex16(fnv1a(record)) != skeleton_hashes[s]) {
+    if (hex16(fnv1a64(record)) != skeleton_hashes[s]) {
       throw InputError(skeletons_path, 0, "skeleton " + std::to_string(s) + " does not match its hash in the manifest" + kHint);
     }
     CachedSkeleton parsed = parse_skeleton(record, skeletons_path, static_cast<int>(s));

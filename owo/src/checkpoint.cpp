@@ -63,11 +63,7 @@ LoadedOwoCheckpoint load_owo_checkpoint(const std::string& dir) {
   LoadedOwoCheckpoint loaded;
   reader.read(root, "training_step", "", loaded.info.training_step);
   reader.read(root, "data", "", loaded.info.data);
-  std::string tensor_file;
-  reader.read(root, "tensors", "", tensor_file);
-  if (tensor_file.empty() || fs::path(tensor_file).has_parent_path()) {
-    reader.fail("field 'tensors' must name a file inside the checkpoint directory");
-  }
+  const std::string tensor_file = reader.entry(root, "tensors");
   try {
     encoder_config.validate();
     pretrain_config.validate();

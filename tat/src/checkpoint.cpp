@@ -62,14 +62,8 @@ LoadedTatCheckpoint load_tat_checkpoint(const std::string& dir) {
   fields.read(root, "fps", "", loaded.info.fps);
   fields.read(root, "training_step", "", loaded.info.training_step);
   fields.read(root, "data", "", loaded.info.data);
-  std::string tensor_file, owo_dir;
-  fields.read(root, "tensors", "", tensor_file);
-  fields.read(root, "owo", "", owo_dir);
-  for (const std::string* name : {&tensor_file, &owo_dir}) {
-    if (name->empty() || fs::path(*name).has_parent_path()) {
-      fields.fail("fields 'tensors' and 'owo' must name entries inside the checkpoint directory");
-    }
-  }
+  const std::string tensor_file = fields.entry(root, "tensors");
+  const std::string owo_dir = fields.entry(root, "owo");
   if (loaded.info.window_frames <= 0 || loaded.info.fps <= 0) {
     fields.fail("window_frames and fps must be positive; " + fields.hint());
   }

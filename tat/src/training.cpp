@@ -46,34 +46,19 @@ void TatTrainConfig::validate() const {
   } catch (const std::invalid_argument& e) {
     require(false, std::string("optimizer.") + e.what());
   }
+  try {
+    data.validate();
+  } catch (const std::invalid_argument& e) {
+    require(false, e.what());
+  }
   require(steps >= 1 && batch_size >= 1, "steps and batch_size must be >= 1");
   require(data.window_frames >= model.downsampling() && data.window_frames % model.downsampling() == 0,
           "data.window_frames must be a positive multiple of the downsampling " + std::to_string(model.downsampling()) +
               ", got " + std::to_string(data.window_frames));
-  require(data.augment.probability >= 0 && data.augment.probability <= 1, "data.augment.probability must be in [0, 1]");
-  require(data.augment.probability == 0 || !data.augment.kinds.empty(), "data.augment.kinds is empty");
-  for (const std::string& kind : data.augment.kinds) {
-    try {
-      augment_kind_from_string(kind);
-    } catch (const std::invalid_argument& e) {
-      require(false, std::string("data.augment.kinds: ") + e.what());
-    }
-  }
-  require(data.joint_buckets >= 0 && max_joint_frames >= 0, "data.joint_buckets and max_joint_frames must be >= 0");
+  require(max_joint_frames >= 0, "max_joint_frames must be >= 0");
   require(log_every >= 0 && validate_every >= 0 && checkpoint_every >= 0,
           "log_every, validate_every and checkpoint_every must be >= 0 (0: only at the end; validation: never)");
   require(validation_batches >= 1, "validation_batches must be >= 1");
-}
-
-void visit_fields(train::ConfigVisitor& v, ClipAugmentConfig& c) {
-  v.field("probability", c.probability, "chance that a training clip's rig is augmented");
-  v.field("kinds", c.kinds, "the augmentations an augmented clip draws one of (rest, length, remove, subdivide)");
-}
-
-void visit_fields(train::ConfigVisitor& v, TatDataConfig& c) {
-  v.field("window_frames", c.window_frames, "training crop in frames; a multiple of 2^model.blocks");
-  v.field("joint_buckets", c.joint_buckets, "runs of this many batches are sorted by joint count (less padding); 0 = off");
-  v.object("augment", c.augment, "rig augmentation of the training clips");
 }
 
 void visit_fields(train::ConfigVisitor& v, TatTrainConfig& c) {
@@ -130,15 +115,7 @@ TatTrainer::TatTrainer(const TatTrainConfig& config, const DatasetCache& cache, 
   for (auto& parameter : owo_->parameters()) parameter.set_requires_grad(false);
   optimizer_ = train::make_adamw(tokenizer_->parameters(), config_.optimizer);
 
-  BatchOptions batches;
-  batches.batch_size = static_cast<int>(config_.batch_size);
-  batches.crop_frames = static_cast<int>(config_.data.window_frames);
-  batches.seed = config_.seed;
-  batches.drop_last = true;
-  batches.augment_probability = config_.data.augment.probability;
-  batches.augment_kinds.clear();
-  for (const std::string& kind : config_.data.augment.kinds) batches.augment_kinds.push_back(augment_kind_from_string(kind));
-  batches.joint_buckets = static_cast<int>(config_.data.joint_buckets);
+  BatchOptions batches = train::training_batches(config_.data, config_.batch_size, config_.seed, ranks_);
   if (config_.model.kind == TokenizerKind::ZeroPadRvq) {
     // Subdivision adds joints beyond the fixed channel layout of the padding baseline.
     batches.augment_kinds = {AugmentKind::RestPose, AugmentKind::BoneLength, AugmentKind::JointRemoval};
@@ -148,13 +125,11 @@ TatTrainer::TatTrainer(const TatTrainConfig& config, const DatasetCache& cache, 
   validation.joint_buckets = 0;
   validation.shuffle = false;
   validation.drop_last = false;
-  if (ranks_ != nullptr) {
-    if (config_.batch_size < ranks_->world_size()) {
-      throw std::invalid_argument("batch_size " + std::to_string(config_.batch_size) + " is smaller than the " +
-                                  std::to_string(ranks_->world_size()) + " ranks: each rank needs a share");
-    }
-    batches.shard_rank = ranks_->rank();
-    batches.shard_count = ranks_->world_size();
+  validation.shard_rank = 0;
+  validation.shard_count = 1;
+  if (ranks_ != nullptr && config_.batch_size < ranks_->world_size()) {
+    throw std::invalid_argument("batch_size " + std::to_string(config_.batch_size) + " is smaller than the " +
+                                std::to_string(ranks_->world_size()) + " ranks: each rank needs a share");
   }
   const int64_t train_clips = static_cast<int64_t>(cache.clips_in(Split::Train).size());
   if (train_clips < config_.batch_size) {
@@ -300,7 +275,7 @@ void TatTrainer::save(const std::string& dir, int64_t step) {
   state.step = step;
   state.config = train::write_config(config_);
   state.schedule = schedule_.to_json();
-  state.data = {{"epoch", train_->epoch()}, {"index", train_->index()}};
+  state.data = train::batch_position(*train_);
   save_tat_checkpoint(dir, *tokenizer_, *owo_, info,
                       [&](const std::string& temp) { train::write_training_state(temp, state, *optimizer_); });
 }
@@ -314,17 +289,7 @@ int64_t TatTrainer::resume(const std::string& dir) {
   train::load_optimizer_state(dir, *optimizer_, device_);
   schedule_ = train::LearningRateSchedule::resumed(config_.optimizer, state.schedule, state.step, config_.steps,
                                                    state_path);
-  const train::JsonFields fields(state_path, "the training state is damaged; train again into a new --out");
-  int64_t epoch = 0, index = 0;
-  fields.read(state.data, "epoch", "data.", epoch);
-  fields.read(state.data, "index", "data.", index);
-  try {
-    train_->seek(static_cast<int>(epoch), static_cast<int>(index));
-  } catch (const std::out_of_range&) {
-    throw InputError(state_path, 0,
-                     "batch " + std::to_string(index) + " of epoch " + std::to_string(epoch) +
-                         " is not in this train split; resume with the same --data, or train into a new --out");
-  }
+  train::seek_batches(*train_, state.data, state_path);
   return state.step;
 }
 

@@ -39,4 +39,15 @@ tat::BatchTensors make_batch(const std::vector<Skeleton>& skeletons, const std::
   return x;
 }
 
+owo::OwoPretrainer tiny_frozen_owo() {
+  torch::manual_seed(3);
+  owo::OwoConfig encoder;
+  encoder.name_dim = 0;
+  encoder.dim = 16;
+  encoder.layers = 1;
+  encoder.heads = 2;
+  encoder.edge_dim = 8;
+  return owo::OwoPretrainer(encoder, owo::PretrainConfig{});
+}
+
 }  // namespace nec::testing

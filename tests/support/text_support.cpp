@@ -59,4 +59,20 @@ void write_corpus_word_vectors(const std::string& path, int dim) {
   text::write_word_vectors(path, words, rows, dim);
 }
 
+TempDir* CorpusTextTest::folder_ = nullptr;
+
+void CorpusTextTest::SetUpTestSuite() {
+  folder_ = new TempDir();
+  train_corpus_piece_model(pieces_path());
+  write_corpus_word_vectors(vectors_path(), 16);
+}
+
+void CorpusTextTest::TearDownTestSuite() {
+  delete folder_;
+  folder_ = nullptr;
+}
+
+std::string CorpusTextTest::pieces_path() { return *folder_ / "spm.model"; }
+std::string CorpusTextTest::vectors_path() { return *folder_ / "words.bin"; }
+
 }  // namespace nec::testing

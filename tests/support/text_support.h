@@ -2,6 +2,10 @@
 // model trained on it, and hand-made word vectors with a known geometry.
 #pragma once
 
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+
 #include <string>
 #include <vector>
 
@@ -19,5 +23,18 @@ void train_corpus_piece_model(const std::string& path, int vocab_size = 120);
 // "sprints" to "runs", "scuttles" to "crawls"; the corpus words are nearly
 // orthogonal to one another. Written with text::write_word_vectors to `path`.
 void write_corpus_word_vectors(const std::string& path, int dim = 16);
+
+// A test suite with a piece model and 16-d word vectors of caption_corpus(),
+// made once for the suite in a temporary folder.
+class CorpusTextTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite();
+  static void TearDownTestSuite();
+  static std::string pieces_path();
+  static std::string vectors_path();
+
+ private:
+  static TempDir* folder_;
+};
 
 }  // namespace nec::testing

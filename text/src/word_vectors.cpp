@@ -6,6 +6,7 @@
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
+#include "nec/motion/hash.h"
 #include "nec/motion/names.h"
 #include "nec/motion/random.h"
 
@@ -52,15 +53,6 @@ size_t round_up_64(size_t value) { return (value + 63) / 64 * 64; }
 
 [[noreturn]] void fail(const std::string& path, const std::string& problem) {
   throw InputError(path, 0, problem + "; " + kWordVectorHint);
-}
-
-uint64_t fnv1a64(std::string_view bytes) {
-  uint64_t hash = 0xCBF29CE484222325ull;
-  for (const char c : bytes) {
-    hash ^= static_cast<unsigned char>(c);
-    hash *= 0x100000001B3ull;
-  }
-  return hash;
 }
 
 std::string ascii_lower(std::string_view word) {

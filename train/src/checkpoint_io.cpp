@@ -51,6 +51,15 @@ const json& JsonFields::object(const json& parent, const std::string& key, const
 
 void JsonFields::fail(const std::string& problem) const { throw InputError(file_, 0, problem); }
 
+std::string JsonFields::entry(const json& root, const std::string& key) const {
+  std::string name;
+  read(root, key, "", name);
+  if (name.empty() || std::filesystem::path(name).has_parent_path() || name == "." || name == "..") {
+    fail("field '" + key + "' must name an entry inside the checkpoint directory, got '" + name + "'; " + hint_);
+  }
+  return name;
+}
+
 const json& JsonFields::field(const json& parent, const std::string& key, const std::string& where) const {
   const auto it = parent.find(key);
   if (it == parent.end()) fail("field '" + where + key + "' is missing; " + hint_);

@@ -17,14 +17,6 @@ void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument("TextEncoderConfig: " + message);
 }
 
-layers::TransformerOptions transformer_options(const TextEncoderConfig& c) {
-  layers::TransformerOptions options;
-  options.dim = c.dim;
-  options.heads = c.heads;
-  options.feedforward = c.feedforward;
-  options.dropout = c.dropout;
-  return options;
-}
 
 int64_t piece_width(const TextEncoderConfig& c) { return c.word_dim > 0 ? c.word_dim : c.dim; }
 
@@ -109,8 +101,8 @@ TextEncoderImpl::TextEncoderImpl(const TextEncoderConfig& config) : config_(conf
   piece_embedding_ = register_module("piece_embedding", torch::nn::Embedding(config_.vocab_size, piece_width(config_)));
   input_ = register_module("input", torch::nn::Linear(piece_width(config_) + config_.word_dim + 1, config_.dim));
   positions_ = register_parameter("positions", torch::randn({config_.max_pieces, config_.dim}) * 0.02);
-  transformer_ = register_module("transformer",
-                                 std::make_shared<layers::TransformerStackImpl>(transformer_options(config_), config_.layers));
+  const layers::TransformerOptions layer{config_.dim, config_.heads, config_.feedforward, config_.dropout};
+  transformer_ = register_module("transformer", std::make_shared<layers::TransformerStackImpl>(layer, config_.layers));
   sentence_ = register_module("sentence", torch::nn::Linear(config_.dim, config_.output_dim));
 }
 

@@ -25,6 +25,7 @@
 #include "nec/tat/metrics.h"
 #include "nec/tat/tokenizer.h"
 #include "nec/text/word_vectors.h"
+#include "nec/train/clip_batches.h"
 #include "nec/train/loop.h"
 #include "nec/train/optimizer.h"
 
@@ -55,26 +56,11 @@ inline train::OptimizerConfig default_tat_optimizer() {
   return config;
 }
 
-// Rig augmentation of the training clips (motion/augment.h).
-struct ClipAugmentConfig {
-  double probability = 0.5;  // chance that an item's rig is augmented
-  std::vector<std::string> kinds{"rest", "length", "remove", "subdivide"};  // one drawn uniformly per augmented item
-};
-void visit_fields(train::ConfigVisitor& v, ClipAugmentConfig& c);
-
-// How the training batches are cut from the cache.
-struct TatDataConfig {
-  int64_t window_frames = 64;  // training crop T; a multiple of the downsampling
-  int64_t joint_buckets = 16;  // batches of similar joint counts (BatchOptions::joint_buckets); 0 = off
-  ClipAugmentConfig augment;
-};
-void visit_fields(train::ConfigVisitor& v, TatDataConfig& c);
-
 struct TatTrainConfig {
   TatConfig model;
   LossWeights loss;
   train::OptimizerConfig optimizer = default_tat_optimizer();  // AdamW, warm-up + cosine
-  TatDataConfig data;
+  train::ClipBatchConfig data;       // crop (a multiple of the downsampling), joint buckets, augmentation
   int64_t steps = 4000;              // the step training ends at
   int64_t batch_size = 32;           // clips per step over all ranks, e.g. 32
   int64_t max_joint_frames = 0;      // most B × J × T entries per forward/backward pass; a bigger batch is run

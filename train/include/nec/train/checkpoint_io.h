@@ -48,6 +48,9 @@ class JsonFields {
     }
     out = value.get<T>();
   }
+  // A top-level string naming a file or folder inside the checkpoint directory
+  // (no path separators), e.g. "tensors.pt"; fails otherwise.
+  std::string entry(const nlohmann::json& root, const std::string& key) const;
   [[noreturn]] void fail(const std::string& problem) const;
   const std::string& file() const { return file_; }
   const std::string& hint() const { return hint_; }

@@ -1,0 +1,94 @@
+// nec retrieve: motions of a cache for a caption, or captions for a motion, through the evaluator's index.
+#include "command_line.h"
+#include "commands.h"
+
+#include "nec/evaluator/retrieval.h"
+#include "nec/evaluator/retrieval_index.h"
+#include "nec/motion/dataset.h"
+#include "nec/motion/error.h"
+#include "nec/motion/files.h"
+#include "nec/tat/session.h"
+#include "nec/viewer/html.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <filesystem>
+
+namespace nec::app {
+
+int run_retrieve(int argc, char** argv) {
+  CommandLine cli("nec retrieve",
+                  "Text-motion retrieval with a trained evaluator. With a CAPTION: the clips of the database that\n"
+                  "match it best (file, clip span, caption, cosine score). With --motion: the database's captions\n"
+                  "nearest to a BVH clip. The database's embeddings are computed once and kept in the cache\n"
+                  "directory (retrieval-<evaluator>.index), rebuilt when the cache or the evaluator changes.");
+  cli.positional("CAPTION", "what to look for, e.g. \"a dog trots to the left\"", false);
+  cli.option("--motion", "CLIP.bvh", "", "list the captions nearest to this clip instead");
+  cli.option("--db", "CACHE", "", "dataset cache to search (from `nec prepare`)", true);
+  cli.option("--evaluator", "EVAL", "", "evaluator checkpoint (from `nec train evaluator`, e.g. runs/eval/best)", true);
+  cli.option("-k", "K", "5", "how many results");
+  cli.option("--plan", "PLAN", "", "only clips of this body plan or dataset, e.g. quadruped, dog, bandai");
+  cli.option("--view", "PAGE.html", "", "also write a page that plays the matched clips side by side");
+  cli.option("--up", "AXIS", "auto", "up axis of --motion: auto, y or z");
+  cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
+  cli.example("nec retrieve \"a dog trots to the left\" --db cache/ --evaluator runs/eval/best -k 5 --view dog.html");
+  cli.example("nec retrieve --motion walk.bvh --db cache/ --evaluator runs/eval/best");
+  if (!cli.parse(argc, argv)) return 0;
+  const bool by_motion = !cli.value("--motion").empty();
+  const std::vector<std::string>& captions = cli.positionals("CAPTION");
+  if (by_motion == !captions.empty()) throw UsageError("give either a CAPTION or --motion CLIP.bvh");
+  const int64_t k = cli.integer("-k");
+  if (k < 1) throw UsageError("-k must be >= 1");
+  const std::string view = cli.value("--view");
+  if (!view.empty() && std::filesystem::exists(view)) throw UsageError(view + " exists; choose another --view file");
+
+  const auto start = std::chrono::steady_clock::now();
+  const DatasetCache cache = read_cache(cli.value("--db"));
+  evaluator::EvaluatorSession session = evaluator::open_evaluator(cli.value("--evaluator"), cli.value("--glove"));
+  const evaluator::OpenedIndex opened = evaluator::open_retrieval_index(session, cache, cli.value("--evaluator"));
+  if (opened.built) {
+    fmt::print("indexed {} clips and {} captions{}{}\n", opened.index.clips.size(), opened.index.captions.size(),
+               opened.stored ? " into " + opened.path : "", opened.note.empty() ? "" : " (" + opened.note + ")");
+  }
+  const auto query_start = std::chrono::steady_clock::now();
+  if (by_motion) {
+    const PreparedClip clip = tat::prepare_for_model(cli.value("--motion"), cache.fps, cli.up_axis("--up"));
+    const std::vector<evaluator::Match> top = opened.index.nearest_captions(session.embed_clip(clip), static_cast<int>(k));
+    fmt::print("| rank | score | caption |\n|---|---|---|\n");
+    for (size_t i = 0; i < top.size(); ++i) {
+      fmt::print("| {} | {:.3f} | {} |\n", i + 1, top[i].score, opened.index.captions[static_cast<size_t>(top[i].row)]);
+    }
+  } else {
+    const std::string plan = cli.value("--plan");
+    const std::function<bool(int)> keep = plan.empty() ? std::function<bool(int)>() : [&](int clip) {
+      const CacheClip& c = cache.clips[static_cast<size_t>(clip)];
+      return c.dataset == plan || evaluator::body_plan_of(c) == plan;
+    };
+    const std::vector<evaluator::Match> top =
+        opened.index.nearest_clips(session.embed_captions({captions.front()}, "the caption"), static_cast<int>(k), keep);
+    if (top.empty()) throw InputError(cli.value("--db"), 0, "has no clip of plan or dataset '" + plan + "'");
+    fmt::print("| rank | score | clip | span (s) | caption |\n|---|---|---|---|---|\n");
+    std::vector<viewer::ViewClip> views;
+    for (size_t i = 0; i < top.size(); ++i) {
+      const int clip = opened.index.clips[static_cast<size_t>(top[i].row)];
+      const CacheClip& c = cache.clips[static_cast<size_t>(clip)];
+      const double from = c.source_frame / c.fps, to = (c.source_frame + c.frame_count) / c.fps;
+      fmt::print("| {} | {:.3f} | {} | {:.1f}-{:.1f} | {} |\n", i + 1, top[i].score, c.id, from, to,
+                 c.captions.empty() ? "" : c.captions.front());
+      if (!view.empty()) views.push_back({fmt::format("{}. {}", i + 1, c.id), c.captions, cache.clip(clip)});
+    }
+    if (!view.empty()) {
+      viewer::ViewOptions options;
+      options.title = "nec retrieve: " + captions.front();
+      write_file_atomic(view, viewer::make_view_html(views, options));
+      fmt::print("wrote {}\n", view);
+    }
+  }
+  const auto now = std::chrono::steady_clock::now();
+  fmt::print("query {:.1f} ms (total {:.1f} s)\n", std::chrono::duration<double, std::milli>(now - query_start).count(),
+             std::chrono::duration<double>(now - start).count());
+  return 0;
+}
+
+}  // namespace nec::app

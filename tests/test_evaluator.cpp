@@ -1,0 +1,301 @@
+// evaluator/: the contrastive loss on known inputs, the motion encoder's
+// independence from padding, training that learns to match captions, a
+// resumed run that takes the steps of one that never stopped, the best
+// checkpoint kept, and checkpoints that load back or fail with a hint.
+#include "nec/evaluator/evaluator.h"
+#include "nec/evaluator/training.h"
+
+#include "nec/motion/dataset.h"
+#include "nec/motion/error.h"
+#include "nec/motion/files.h"
+#include "nec/motion/preprocess.h"
+#include "nec/train/config_fields.h"
+#include "nec/train/loop.h"
+#include "nec/zoo/creature.h"
+#include "nec/zoo/motion_synthesis.h"
+#include "test_support.h"
+#include "tat_support.h"
+#include "text_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <torch/torch.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace nec {
+namespace {
+
+namespace fs = std::filesystem;
+using evaluator::EvaluatorTrainConfig;
+using evaluator::EvaluatorTrainer;
+
+// Dogs and people that walk, turn or run (trot), three of each, 2 s; `val`
+// clips of them (the last seeds) go to the val split.
+DatasetCache action_cache(bool with_validation) {
+  struct Kind {
+    zoo::BodyPlan plan;
+    zoo::Action action;
+    double turn_rate;
+    const char* caption;
+  };
+  const std::vector<Kind> kinds{{zoo::BodyPlan::Quadruped, zoo::Action::Walk, 0, "a dog walks forward"},
+                                {zoo::BodyPlan::Quadruped, zoo::Action::Turn, 90, "a dog turns to the left"},
+                                {zoo::BodyPlan::Quadruped, zoo::Action::Trot, 0, "a dog trots forward"},
+                                {zoo::BodyPlan::Biped, zoo::Action::Walk, 0, "a person walks forward"},
+                                {zoo::BodyPlan::Biped, zoo::Action::Turn, 90, "a person turns to the left"},
+                                {zoo::BodyPlan::Biped, zoo::Action::Run, 0, "a person runs forward"}};
+  std::vector<CacheEntry> entries;
+  for (size_t k = 0; k < kinds.size(); ++k) {
+    for (int seed = 0; seed < 4; ++seed) {
+      const zoo::Creature creature = zoo::make_creature(kinds[k].plan, 10 + static_cast<uint64_t>(seed));
+      zoo::MotionSpec spec;
+      spec.action = kinds[k].action;
+      spec.turn_rate = kinds[k].turn_rate;
+      spec.speed = kinds[k].action == zoo::Action::Turn ? 0.0 : 0.8;
+      spec.seconds = 2.0;
+      spec.seed = static_cast<uint64_t>(seed);
+      const std::string source = "zoo/k" + std::to_string(k) + "_s" + std::to_string(seed) + ".bvh";
+      CacheEntry entry;
+      entry.prepared = preprocess(Clip{creature.skeleton, zoo::synthesize_motion(creature, spec).motion, {}}, source);
+      entry.source = source;
+      entry.dataset = "zoo";
+      entry.captions = {kinds[k].caption};
+      entries.push_back(std::move(entry));
+    }
+  }
+  CacheOptions options;
+  options.split.val_fraction = 0.0;
+  options.split.test_fraction = 0.0;
+  DatasetCache cache = build_cache(entries, options);
+  if (with_validation) {
+    for (CacheClip& clip : cache.clips) {
+      if (clip.source.find("_s3") != std::string::npos) clip.split = Split::Val;
+    }
+  }
+  return cache;
+}
+
+
+class EvaluatorTest : public testing::CorpusTextTest {
+ protected:
+  EvaluatorTest() : vectors_(text::WordVectors::load(vectors_path())) {}
+
+  EvaluatorTrainConfig small_config() const {
+    EvaluatorTrainConfig config;
+    const text::PieceModel pieces = text::PieceModel::load(pieces_path());
+    config.model.motion.joint_embedding_dim = 16;
+    config.model.motion.dim = 32;
+    config.model.motion.heads = 2;
+    config.model.motion.feedforward = 64;
+    config.model.motion.temporal_layers = 1;
+    config.model.motion.max_steps = 16;
+    config.model.motion.output_dim = 32;
+    config.model.text.vocab_size = pieces.vocab_size();
+    config.model.text.word_dim = 16;
+    config.model.text.dim = 32;
+    config.model.text.heads = 2;
+    config.model.text.feedforward = 64;
+    config.model.text.layers = 1;
+    config.model.text.max_pieces = 16;
+    config.model.text.output_dim = 32;
+    config.optimizer.learning_rate = 3e-3;
+    config.optimizer.warmup_steps = 5;
+    config.data.window_frames = 32;
+    config.data.augment.probability = 0.3;
+    config.data.joint_buckets = 0;
+    config.batch_size = 12;
+    config.steps = 150;
+    config.seed = 5;
+    return config;
+  }
+  text::WordVectors vectors_;
+};
+
+TEST(ContrastiveLoss, MatchesItsClosedForm) {
+  // Two orthogonal pairs: logits s on the diagonal, 0 off it; each row's loss is log(1 + e^-s).
+  const at::Tensor e = torch::eye(2);
+  const at::Tensor diagonal = torch::eye(2).to(torch::kBool);
+  for (const double s : {1.0, 5.0}) {
+    const double expected = std::log(1.0 + std::exp(-s));
+    const double got = evaluator::contrastive_loss(e, e, torch::tensor(s), diagonal).item<double>();
+    EXPECT_NEAR(got, expected, 1e-6) << "scale " << s << ": difference " << got - expected;
+  }
+  // Equal captions are both targets: half the mass on each; with identical
+  // embeddings the loss is then log 2 whatever the scale, its minimum.
+  const at::Tensor same = torch::ones({2, 2}, torch::kBool);
+  const at::Tensor one = torch::tensor({{1.0f, 0.0f}, {1.0f, 0.0f}});
+  const double got = evaluator::contrastive_loss(one, one, torch::tensor(10.0), same).item<double>();
+  EXPECT_NEAR(got, std::log(2.0), 1e-6);
+  // Swapping the texts of two distinct pairs raises the loss.
+  const at::Tensor swapped = torch::tensor({{0.0f, 1.0f}, {1.0f, 0.0f}});
+  EXPECT_GT(evaluator::contrastive_loss(e, swapped, torch::tensor(5.0), diagonal).item<double>(), 4.0);
+}
+
+TEST(MotionEncoder, AClipsEmbeddingDoesNotDependOnWhatItIsBatchedWith) {
+  torch::manual_seed(2);
+  evaluator::MotionEncoderConfig config;
+  config.joint_embedding_dim = 8;
+  config.dim = 16;
+  config.heads = 2;
+  config.feedforward = 32;
+  config.max_steps = 8;
+  evaluator::MotionEncoder encoder(config);
+  encoder->eval();
+  torch::NoGradGuard no_grad;
+  // Item 0: 3 joints, 10 frames; item 1: 5 joints, 24 frames.
+  at::Tensor features = torch::randn({2, 24, 5, 9});
+  at::Tensor joint_mask = torch::ones({2, 5}, torch::kBool);
+  joint_mask[0].narrow(0, 3, 2).fill_(false);
+  at::Tensor frame_mask = torch::ones({2, 24}, torch::kBool);
+  frame_mask[0].narrow(0, 10, 14).fill_(false);
+  const at::Tensor joints = torch::randn({2, 5, 8});
+  const at::Tensor both = encoder->forward(features, joint_mask, frame_mask, joints);
+  const at::Tensor alone = encoder->forward(features[0].narrow(0, 0, 10).narrow(1, 0, 3).unsqueeze(0),
+                                            joint_mask[0].narrow(0, 0, 3).unsqueeze(0),
+                                            frame_mask[0].narrow(0, 0, 10).unsqueeze(0),
+                                            joints[0].narrow(0, 0, 3).unsqueeze(0));
+  const double difference = (both[0] - alone[0]).abs().max().item<double>();
+  EXPECT_LT(difference, 1e-5) << "padding changed the embedding by " << difference;
+  // What sits in the padding does not matter either.
+  at::Tensor noisy = features.clone();
+  noisy[0].narrow(0, 10, 14).normal_();
+  noisy[0].narrow(1, 3, 2).normal_();
+  const double noise = (encoder->forward(noisy, joint_mask, frame_mask, joints)[0] - both[0]).abs().max().item<double>();
+  EXPECT_LT(noise, 1e-5) << noise;
+  EXPECT_THROW(encoder->forward(torch::zeros({1, 40, 3, 9}), torch::ones({1, 3}, torch::kBool),
+                                torch::ones({1, 40}, torch::kBool), torch::zeros({1, 3, 8})),
+               std::invalid_argument);
+}
+
+TEST_F(EvaluatorTest, TrainingLearnsToFindTheCaptionOfEachMotion) {
+  const DatasetCache cache = action_cache(false);
+  const EvaluatorTrainConfig config = small_config();
+  EvaluatorTrainer trainer(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  const auto retrieval = [&] {
+    trainer.model()->eval();
+    const std::vector<int> clips = cache.clips_in(Split::Train);
+    std::vector<std::string> captions;
+    for (const int clip : clips) captions.push_back(cache.clips[static_cast<size_t>(clip)].captions[0]);
+    const at::Tensor text =
+        evaluator::embed_captions(*trainer.model(), text::PieceModel::load(pieces_path()), &vectors_, captions, "t", torch::kCPU);
+    const at::Tensor motion = evaluator::embed_clips(*trainer.model(), *testing::tiny_frozen_owo()->encoder, nullptr, cache, clips, torch::kCPU);
+    trainer.model()->train();
+    // Each motion's best caption is its own kind's (6 kinds, 4 clips each).
+    const at::Tensor best = motion.matmul(text.t()).argmax(1);
+    int correct = 0;
+    for (int64_t i = 0; i < best.size(0); ++i) correct += captions[static_cast<size_t>(best[i].item<int64_t>())] == captions[static_cast<size_t>(i)];
+    return static_cast<double>(correct) / static_cast<double>(best.size(0));
+  };
+  const double before = retrieval();
+  double first = 0, last = 0;
+  for (int64_t step = 1; step <= config.steps; ++step) {
+    const train::LossTerms terms = trainer.step(step);
+    if (step == 1) first = terms[0].second;
+    last = terms[0].second;
+  }
+  const double after = retrieval();
+  // Each batch holds about 2 clips of a kind: the loss cannot go below log 2 = 0.69.
+  EXPECT_LT(last, 0.6 * first) << "loss " << first << " -> " << last;
+  EXPECT_GE(after, 0.75) << "top-1 caption accuracy " << before << " -> " << after << " (chance 1/6)";
+}
+
+TEST_F(EvaluatorTest, AResumedRunTakesTheStepsOfOneThatNeverStoppedAndKeepsTheBest) {
+  const DatasetCache cache = action_cache(true);
+  EvaluatorTrainConfig config = small_config();
+  config.steps = 6;
+  config.validate_every = 2;
+  config.checkpoint_every = 3;
+  config.log_every = 0;
+  const testing::TempDir dir;
+  EvaluatorTrainer straight(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  ASSERT_TRUE(straight.has_validation());
+  std::vector<double> straight_losses;
+  for (int64_t step = 1; step <= 6; ++step) straight_losses.push_back(straight.step(step)[0].second);
+
+  EvaluatorTrainer first(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  train::TrainingHooks hooks = first.hooks(dir / "run");
+  for (int64_t step = 1; step <= 3; ++step) {
+    hooks.step(step);
+    if (step == 2) hooks.validate(step);
+  }
+  hooks.checkpoint(3);
+  ASSERT_TRUE(fs::exists(fs::path(dir / "run") / "best" / "config.json"));
+  EXPECT_EQ(first.best_step(), 2);
+
+  EvaluatorTrainer resumed(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  EXPECT_EQ(resumed.resume(dir / "run"), 3);
+  EXPECT_EQ(resumed.best_step(), 2);
+  for (int64_t step = 4; step <= 6; ++step) {
+    const double loss = resumed.step(step)[0].second;
+    EXPECT_NEAR(loss, straight_losses[static_cast<size_t>(step - 1)], 1e-5) << "step " << step;
+  }
+  // A later checkpoint without a better validation keeps the best it had.
+  resumed.save(dir / "run", 6);
+  const evaluator::LoadedEvaluator best = evaluator::load_evaluator_checkpoint(fs::path(dir / "run") / "best");
+  EXPECT_EQ(best.info.training_step, 2);
+  EXPECT_EQ(best.info.best_step, 2);
+}
+
+TEST_F(EvaluatorTest, ACheckpointLoadsBackToTheSameEmbeddingsOrFailsWithAHint) {
+  const DatasetCache cache = action_cache(false);
+  EvaluatorTrainConfig config = small_config();
+  EvaluatorTrainer trainer(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  trainer.step(1);
+  const testing::TempDir dir;
+  trainer.save(dir / "eval", 1);
+  trainer.model()->eval();
+  const at::Tensor expected = evaluator::embed_clips(*trainer.model(), *testing::tiny_frozen_owo()->encoder, nullptr, cache, {0, 5}, torch::kCPU);
+  evaluator::EvaluatorSession session(evaluator::load_evaluator_checkpoint(dir / "eval"),
+                                      text::WordVectors::load(vectors_path()), torch::kCPU);
+  const double difference = (session.embed_clips(cache, {0, 5}) - expected).abs().max().item<double>();
+  EXPECT_LT(difference, 1e-6) << difference;
+  const at::Tensor texts = session.embed_captions({"a dog walks forward"}, "query");
+  EXPECT_NEAR(texts.norm().item<double>(), 1.0, 1e-5);
+  EXPECT_THROW(session.embed_captions({"   "}, "query"), InputError);
+
+  try {
+    evaluator::load_evaluator_checkpoint(dir / "missing");
+    FAIL() << "loaded a missing checkpoint";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("nec train evaluator"), std::string::npos) << e.what();
+  }
+  // A checkpoint of another kind names what it is.
+  write_file_atomic(fs::path(dir / "eval") / "config.json", R"({"format": "nec-tat", "version": 9})");
+  try {
+    evaluator::load_evaluator_checkpoint(dir / "eval");
+    FAIL() << "loaded a TAT config as an evaluator";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("nec-tat"), std::string::npos) << e.what();
+  }
+}
+
+TEST(EvaluatorTrainConfig, UnknownFieldsAreNamedAndOnlyTheCadenceMayChangeOnResume) {
+  const testing::TempDir dir;
+  write_file_atomic(dir / "c.json", R"({"comment": "ok", "model": {"motion": {"dimm": 3}}})");
+  try {
+    evaluator::read_evaluator_train_config(dir / "c.json");
+    FAIL() << "read an unknown field";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("model.motion.dimm"), std::string::npos) << e.what();
+  }
+  const std::set<std::string> may_change = train::fields_that_may_change<EvaluatorTrainConfig>();
+  EXPECT_EQ(may_change, (std::set<std::string>{"steps", "log_every", "validate_every", "checkpoint_every"}));
+}
+
+TEST(EvaluatorTrainConfig, TheShippedConfigReadsAndWritesBackItsOwnValues) {
+  const std::string path = (fs::path(__FILE__).parent_path().parent_path() / "configs" / "evaluator_cpu.json").string();
+  const nlohmann::json file = nlohmann::json::parse(read_file(path));
+  const nlohmann::json written = train::write_config(evaluator::read_evaluator_train_config(path));
+  const nlohmann::json given = file.flatten();
+  for (auto it = given.begin(); it != given.end(); ++it) {
+    if (it.key().find("comment") != std::string::npos) continue;
+    EXPECT_EQ(written.at(nlohmann::json::json_pointer(it.key())), it.value()) << it.key();
+  }
+}
+
+}  // namespace
+}  // namespace nec
