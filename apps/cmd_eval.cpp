@@ -9,6 +9,7 @@ int run_eval(int argc, char** argv) {
                     {{"owo", run_eval_owo, "OwO skeleton encoder on skeletons it never saw: LCA accuracy, offsets, tree rebuild"},
                      {"recon", run_eval_recon, "tokenizer reconstruction error on clips it never trained on"},
                      {"transfer", run_eval_transfer, "transferred clips against their sources: speed, heading, feet, bones"},
+                     {"t2m", run_eval_t2m, "generated motion against real motion: R-Precision, FID, Diversity, Coverage, ..."},
                      {"retrieval", run_eval_retrieval, "evaluator R-Precision: mixed, within plan, creature words masked, floor"}},
                     argc, argv);
 }

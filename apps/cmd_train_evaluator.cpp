@@ -87,7 +87,9 @@ int run_train_evaluator(int argc, char** argv) {
                trainer.parameter_count(), cli.value("--data"), trainer.train_clip_count(), start_step + 1, config.steps,
                config.batch_size, config.data.window_frames, run.device.str(), run.ranks ? run.ranks->world_size() : 1,
                torch::get_num_threads());
-    if (!trainer.has_validation()) fmt::print("no val split with captions: no validation, no best model\n");
+    if (!trainer.has_validation()) {
+      fmt::print("fewer than {} captioned val clips: no validation, no best model\n", evaluator::kMinValidationClips);
+    }
     std::fflush(stdout);
   }
   const int code = run_training_steps(run, trainer.loop_schedule(), start_step, out_dir, trainer.hooks(out_dir));

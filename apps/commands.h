@@ -27,6 +27,7 @@ int run_train_evaluator(int argc, char** argv);  // nec train evaluator
 int run_eval_recon(int argc, char** argv);
 int run_eval_transfer(int argc, char** argv);
 int run_eval_retrieval(int argc, char** argv);  // nec eval retrieval
+int run_eval_t2m(int argc, char** argv);        // nec eval t2m
 int run_retrieve(int argc, char** argv);        // nec retrieve
 
 }  // namespace nec::app

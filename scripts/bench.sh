@@ -13,18 +13,22 @@
 #       decode throughput and the step's peak memory. Goal: the C++ step takes
 #       at most the Python step's time. About 4 minutes on an idle 2-core machine.
 #       Runs with OMP_WAIT_POLICY=passive unless the variable is set.
+#   scripts/bench.sh evaluator
+#       The text-motion evaluator (configs/evaluator_cpu.json): captions encoded
+#       per second, clips embedded per second (22 and 100 joints), and a
+#       retrieval query over a 10,000-clip index (goal: < 20 ms on 2 cores).
 # Raw results in build-bench/: bench_motion.json, peer_threejs.json,
-# bench_tat_step{1,2}.json, peer_tat_step{1,2}.json, bench_tat_clip.json
+# bench_tat_step{1,2}.json, peer_tat_step{1,2}.json, bench_tat_clip.json, bench_evaluator.json
 # (NEC_BENCH_BUILD=DIR builds and writes in DIR instead).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 section=all
 case "${1:-}" in
-  motion | tat) section=$1; shift ;;
+  motion | tat | evaluator) section=$1; shift ;;
 esac
-if [ "$section" = tat ] && [ $# -gt 0 ]; then
-  echo "bench.sh: 'tat' takes no arguments" >&2
+if [ "$section" != motion ] && [ "$section" != all ] && [ $# -gt 0 ]; then
+  echo "bench.sh: '$section' takes no arguments" >&2
   exit 2
 fi
 build=${NEC_BENCH_BUILD:-build-bench}
@@ -199,8 +203,35 @@ if worst > 1e-3:
 PY
 }
 
+bench_evaluator() {
+  cmake --build "$build" --target bench_evaluator
+  OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive} "$build"/benchmarks/bench_evaluator --benchmark_format=console \
+    --benchmark_out="$build"/bench_evaluator.json --benchmark_out_format=json >/dev/null
+  "$python" - "$build"/bench_evaluator.json <<'PY'
+import json, sys
+rows = json.load(open(sys.argv[1]))["benchmarks"]
+def median(prefix, field="real_time"):
+    found = [r for r in rows if r["name"].startswith(prefix + "/") and r.get("aggregate_name") == "median"]
+    if not found:
+        raise SystemExit(f"bench.sh: no {prefix} in bench_evaluator's output")
+    return found[0][field]
+print("""
+| evaluator (configs/evaluator_cpu.json), median of 5 | 1 thread | 2 threads |
+|---|---:|---:|""")
+print("| captions encoded per second (batches of 32) | " +
+      " | ".join(f"{median(f'BM_EncodeCaptions/threads:{t}', 'captions_per_s'):.0f}" for t in (1, 2)) + " |")
+for joints in (22, 100):
+    print(f"| clips embedded per second, {joints} joints, 120 frames (OwO + motion encoder) | " +
+          " | ".join(f"{median(f'BM_EmbedMotions/joints:{joints}/threads:{t}', 'clips_per_s'):.1f}" for t in (1, 2)) + " |")
+print("| retrieval query over 10,000 clips, ms (goal < 20 on 2 cores) | " +
+      " | ".join(f"{median(f'BM_RetrievalQuery/threads:{t}'):.2f}" for t in (1, 2)) + " |")
+print()
+PY
+}
+
 case "$section" in
   motion) bench_motion "$@" ;;
   tat) bench_tat ;;
-  all) bench_motion "$@"; bench_tat ;;
+  evaluator) bench_evaluator ;;
+  all) bench_motion "$@"; bench_tat; bench_evaluator ;;
 esac

@@ -3,8 +3,11 @@
 // resumed run that takes the steps of one that never stopped, the best
 // checkpoint kept, and checkpoints that load back or fail with a hint.
 #include "nec/evaluator/evaluator.h"
+#include "nec/evaluator/retrieval_index.h"
+#include "nec/evaluator/t2m.h"
 #include "nec/evaluator/training.h"
 
+#include "nec/motion/bvh.h"
 #include "nec/motion/dataset.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
@@ -270,6 +273,114 @@ TEST_F(EvaluatorTest, ACheckpointLoadsBackToTheSameEmbeddingsOrFailsWithAHint) {
     FAIL() << "loaded a TAT config as an evaluator";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("nec-tat"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(EvaluatorTest, TheRetrievalIndexIsStoredOnceAndRebuiltForAnotherEvaluator) {
+  const testing::TempDir dir;
+  save_cache(action_cache(false), dir / "cache");
+  const DatasetCache cache = read_cache(dir / "cache");
+  EvaluatorTrainer trainer(small_config(), cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_,
+                           torch::kCPU);
+  trainer.step(1);
+  trainer.save(dir / "eval", 1);
+  const auto open = [&] {
+    evaluator::EvaluatorSession session(evaluator::load_evaluator_checkpoint(dir / "eval"),
+                                        text::WordVectors::load(vectors_path()), torch::kCPU);
+    return evaluator::open_retrieval_index(session, cache, dir / "eval");
+  };
+  const evaluator::OpenedIndex first = open();
+  EXPECT_TRUE(first.built && first.stored) << first.note;
+  EXPECT_EQ(first.index.clips.size(), cache.clips.size());
+  EXPECT_EQ(first.index.captions.size(), 6u);  // six distinct captions
+  const evaluator::OpenedIndex second = open();
+  EXPECT_FALSE(second.built);
+  EXPECT_EQ(second.index.clip_embeddings, first.index.clip_embeddings);
+  // The caption "a dog trots forward" finds the dog trots first.
+  evaluator::EvaluatorSession session(evaluator::load_evaluator_checkpoint(dir / "eval"),
+                                      text::WordVectors::load(vectors_path()), torch::kCPU);
+  const at::Tensor query = session.embed_captions({"a dog trots forward"}, "query");
+  const std::vector<evaluator::Match> top = second.index.nearest_clips(query, 1, {});
+  ASSERT_EQ(top.size(), 1u);
+  EXPECT_NEAR(top[0].score, query.matmul(session.embed_clips(cache, {second.index.clips[top[0].row]}).t()).item<float>(), 1e-5);
+  // Another evaluator: another key, a new index.
+  trainer.step(2);
+  trainer.save(dir / "eval", 2);
+  const evaluator::OpenedIndex third = open();
+  EXPECT_TRUE(third.built);
+  EXPECT_NE(third.path, first.path);
+  // A damaged file is rebuilt, with the reason.
+  write_file_atomic(third.path, "garbage");
+  const evaluator::OpenedIndex fourth = open();
+  EXPECT_TRUE(fourth.built && fourth.stored);
+  EXPECT_NE(fourth.note.find("bad magic"), std::string::npos) << fourth.note;
+}
+
+TEST_F(EvaluatorTest, RealClipsWrittenAsGeneratedOnesScoreLikeTheRealOnes) {
+  // The reference clips themselves, written as BVH with their captions, twice
+  // each: the same distribution (FID ~ 0), every window covered, nothing novel,
+  // the same jitter, and two identical samples per caption (Multimodality 0).
+  const testing::TempDir dir;
+  const DatasetCache cache = action_cache(false);
+  EvaluatorTrainer trainer(small_config(), cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_,
+                           torch::kCPU);
+  trainer.save(dir / "eval", 0);
+  evaluator::EvaluatorSession session(evaluator::load_evaluator_checkpoint(dir / "eval"),
+                                      text::WordVectors::load(vectors_path()), torch::kCPU);
+  fs::create_directories(fs::path(dir / "generated") / "zoo");
+  for (int clip = 0; clip < cache.clip_count(); ++clip) {
+    const Clip real = cache.clip(clip);
+    for (const char* sample : {"a", "b"}) {
+      const fs::path file = fs::path(dir / "generated") / "zoo" / ("clip" + std::to_string(clip) + sample + ".bvh");
+      write_bvh(file.string(), real.skeleton, real.motion);
+      write_file_atomic(fs::path(file).replace_extension(".txt").string(), cache.clips[static_cast<size_t>(clip)].captions[0] + "\n");
+    }
+  }
+  const std::vector<evaluator::GeneratedClip> generated = evaluator::read_generated(dir / "generated", cache.fps, UpAxis::Auto);
+  ASSERT_EQ(generated.size(), 2 * cache.clips.size());
+  EXPECT_EQ(generated[0].group, "zoo");
+  evaluator::T2mOptions options;
+  options.window_stride = 10;
+  const evaluator::T2mReport report = evaluator::evaluate_t2m(session, generated, cache, Split::Train, options);
+  ASSERT_EQ(report.rows.size(), 2u);  // zoo, all
+  const evaluator::T2mRow& zoo = report.rows[0];
+  EXPECT_EQ(zoo.name, "zoo");
+  EXPECT_EQ(zoo.generated, 48);
+  EXPECT_EQ(zoo.reference, 24);
+  EXPECT_TRUE(zoo.has_precision);
+  EXPECT_EQ(zoo.batch_size, 32);
+  EXPECT_LT(zoo.fid, 1e-3) << "FID of the real clips against themselves";
+  EXPECT_NEAR(zoo.diversity, zoo.reference_diversity, 0.25 * zoo.reference_diversity);
+  EXPECT_EQ(zoo.multimodality_captions, 6);
+  EXPECT_LT(zoo.multimodality, zoo.reference_diversity) << "identical samples of a caption, only other clips of its kind differ";
+  EXPECT_EQ(zoo.coverage_pairs, 48 * 4);  // each generated clip against the 4 real clips of its caption
+  EXPECT_GT(zoo.coverage_auc, 0.5);
+  EXPECT_LT(zoo.novelty_auc, 0.5);
+  EXPECT_NEAR(zoo.jitter, zoo.reference_jitter, 0.02 * zoo.reference_jitter)
+      << zoo.jitter << " against " << zoo.reference_jitter;
+  const std::string table = evaluator::to_markdown(report);
+  EXPECT_NE(table.find("| zoo | 48 / 24 |"), std::string::npos) << table;
+
+  // A generated file without its caption is refused by name.
+  fs::remove(fs::path(dir / "generated") / "zoo" / "clip0a.txt");
+  try {
+    evaluator::read_generated(dir / "generated", cache.fps, UpAxis::Auto);
+    FAIL() << "read a generated clip without a caption";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("clip0a.bvh: has no caption"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(EvaluatorTest, ACaptionLongerThanTheTextEncoderTakesIsRefusedBeforeTraining) {
+  const DatasetCache cache = action_cache(false);
+  EvaluatorTrainConfig config = small_config();
+  config.model.text.max_pieces = 4;
+  try {
+    EvaluatorTrainer(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+    FAIL() << "accepted captions longer than the encoder takes";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("more than model.text.max_pieces = 4 (raise it in the config)"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -12,6 +12,13 @@
 #include <stdexcept>
 
 namespace nec::evaluator {
+
+Embeddings rows_of(const Embeddings& all, const std::vector<int>& rows) {
+  Embeddings out(static_cast<Eigen::Index>(rows.size()), all.cols());
+  for (size_t i = 0; i < rows.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = all.row(rows[i]);
+  return out;
+}
+
 namespace {
 
 void require_pairs(const Embeddings& text, const Embeddings& motion, const std::string& what) {

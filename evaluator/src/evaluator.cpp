@@ -177,20 +177,54 @@ at::Tensor EvaluatorSession::embed_captions(const std::vector<std::string>& capt
                                    device_);
 }
 
-at::Tensor EvaluatorSession::embed_clip(const PreparedClip& prepared) {
-  const Features whole = encode_features(prepared.clip.skeleton, prepared.clip.motion);
-  const int count = std::min<int>(whole.frame_count, static_cast<int>(loaded_.model->config().motion.max_frames()));
-  const int begin = (whole.frame_count - count) / 2;
+namespace {
+
+// Frames [begin, begin + count) of a prepared clip as Θ, turned to the clip's frame-0 heading (a training crop).
+Features crop_prepared(const PreparedClip& prepared, double start_heading, int begin, int count) {
   const Motion& motion = prepared.clip.motion;
-  Motion middle = motion;
+  Motion part = motion;
   const size_t joints = static_cast<size_t>(motion.joint_count), first = static_cast<size_t>(begin) * joints;
-  middle.frame_count = count;
-  middle.rotations.assign(motion.rotations.begin() + first, motion.rotations.begin() + first + count * joints);
-  middle.translations.assign(motion.translations.begin() + first, motion.translations.begin() + first + count * joints);
-  Features crop = encode_features(prepared.clip.skeleton, middle);
-  turn_to_heading(crop, root_heading(whole, 0));
-  return embed_motions(*loaded_.model, *loaded_.owo->encoder, vectors_ ? &*vectors_ : nullptr, 1, [&](size_t) {
-    return MotionInput{crop, &prepared.clip.skeleton, &prepared.canonical_names};
+  const size_t last = first + static_cast<size_t>(count) * joints;
+  part.frame_count = count;
+  part.rotations.assign(motion.rotations.begin() + static_cast<std::ptrdiff_t>(first),
+                        motion.rotations.begin() + static_cast<std::ptrdiff_t>(last));
+  part.translations.assign(motion.translations.begin() + static_cast<std::ptrdiff_t>(first),
+                           motion.translations.begin() + static_cast<std::ptrdiff_t>(last));
+  Features crop = encode_features(prepared.clip.skeleton, part);
+  turn_to_heading(crop, start_heading);
+  return crop;
+}
+
+}  // namespace
+
+at::Tensor EvaluatorSession::embed_motion_inputs(const std::vector<MotionInput>& inputs) {
+  return embed_motions(*loaded_.model, *loaded_.owo->encoder, vectors_ ? &*vectors_ : nullptr, inputs.size(),
+                       [&](size_t i) { return inputs[i]; }, device_);
+}
+
+at::Tensor EvaluatorSession::embed_clip(const PreparedClip& prepared) {
+  const int frames = prepared.clip.motion.frame_count;
+  const int count = std::min<int>(frames, static_cast<int>(loaded_.model->config().motion.max_frames()));
+  return embed_clip_windows(prepared, {(frames - count) / 2}, count);
+}
+
+at::Tensor EvaluatorSession::embed_clip_windows(const PreparedClip& prepared, const std::vector<int>& starts, int frames) {
+  const int clip_frames = prepared.clip.motion.frame_count;
+  if (frames < 1 || frames > loaded_.model->config().motion.max_frames()) {
+    throw std::invalid_argument("embed_clip_windows: windows of " + std::to_string(frames) +
+                                " frames, the encoder takes 1 to " + std::to_string(loaded_.model->config().motion.max_frames()));
+  }
+  for (const int start : starts) {
+    if (start < 0 || start + frames > clip_frames) {
+      throw std::invalid_argument("embed_clip_windows: window [" + std::to_string(start) + ", " +
+                                  std::to_string(start + frames) + ") outside the clip's " + std::to_string(clip_frames) +
+                                  " frames");
+    }
+  }
+  const double start_heading = root_heading(encode_features(prepared.clip.skeleton, prepared.clip.motion), 0);
+  return embed_motions(*loaded_.model, *loaded_.owo->encoder, vectors_ ? &*vectors_ : nullptr, starts.size(), [&](size_t i) {
+    return MotionInput{crop_prepared(prepared, start_heading, starts[i], frames), &prepared.clip.skeleton,
+                       &prepared.canonical_names};
   }, device_);
 }
 

@@ -163,10 +163,11 @@ std::string serialize(const RetrievalIndex& index) {
 }
 
 RetrievalIndex deserialize_retrieval_index(const std::string& bytes, const std::string& path) {
-  Reader in(bytes, path);
-  if (in.text(sizeof kMagic) != std::string(kMagic, sizeof kMagic)) {
+  if (bytes.compare(0, sizeof kMagic, kMagic, sizeof kMagic) != 0) {
     throw InputError(path, 0, "not a retrieval index (bad magic); it will be rebuilt");
   }
+  Reader in(bytes, path);
+  in.text(sizeof kMagic);
   if (in.get<uint32_t>() != kRetrievalIndexVersion) throw InputError(path, 0, "another index version; it will be rebuilt");
   RetrievalIndex index;
   index.dim = static_cast<int>(in.get<uint32_t>());

@@ -136,6 +136,10 @@ class EvaluatorSession {
   at::Tensor embed_clips(const DatasetCache& cache, const std::vector<int>& clips);
   // (1, D) of a clip prepared for the model (prepare_for_model): whole, or its middle max_frames.
   at::Tensor embed_clip(const PreparedClip& prepared);
+  // (N, D) of motions given as Θ on their skeletons (at most max_frames each).
+  at::Tensor embed_motion_inputs(const std::vector<MotionInput>& inputs);
+  // (N, D) of frame windows [start, start + frames) of a prepared clip.
+  at::Tensor embed_clip_windows(const PreparedClip& prepared, const std::vector<int>& starts, int frames);
   // (N, D) of frame windows [start, start + frames) of one clip (Coverage, Novelty).
   at::Tensor embed_windows(const DatasetCache& cache, int clip, const std::vector<int>& starts, int frames);
   // (J, E) OwO joint embeddings of a normalized skeleton.

@@ -28,6 +28,9 @@ namespace nec::evaluator {
 
 using Embeddings = Eigen::MatrixXd;  // (N, D): one item per row
 
+// The rows `rows` of `all`, in that order. (rows.size(), D)
+Embeddings rows_of(const Embeddings& all, const std::vector<int>& rows);
+
 // A mean over repeats with its 95% confidence half width (T2M's "± x").
 struct Interval {
   double mean = 0.0;

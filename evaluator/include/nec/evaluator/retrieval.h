@@ -16,6 +16,7 @@
 #include "nec/evaluator/evaluator.h"
 #include "nec/evaluator/metrics.h"
 #include "nec/motion/dataset.h"
+#include "nec/tat/session.h"
 
 #include <nlohmann/json.hpp>
 
@@ -30,8 +31,11 @@ std::string body_plan_of(const CacheClip& clip);
 
 // The creature nouns captions use (the zoo's species and plans, "person", "someone", ...).
 const std::vector<std::string>& creature_words();
-// A normalized caption with every creature word (and its plural) replaced by "creature".
-std::string mask_creature_words(const std::string& normalized_caption);
+// A normalized caption with every creature word (and its plural) replaced by
+// `replacement`: "creature" masks them, a noun ("dog") renames the creature.
+std::string mask_creature_words(const std::string& normalized_caption, const std::string& replacement = "creature");
+// The creature word the captions of `dataset`'s clips use most ("" when none).
+std::string creature_noun_of(const DatasetCache& cache, const std::string& dataset);
 
 // The clips of one split that have captions, with their dataset and body plan.
 struct RetrievalSet {
@@ -41,6 +45,16 @@ struct RetrievalSet {
   std::vector<std::string> plans;     // body_plan_of each clip
 };
 RetrievalSet retrieval_set(const DatasetCache& cache, Split split);
+
+// Captions given by file: `file name<TAB>caption` per line, '#' comments and
+// blank lines skipped (e.g. benchmarks/data/paraphrases.tsv). InputError naming
+// the file and line for a line without a tab, an empty field or a file named twice.
+std::vector<std::pair<std::string, std::string>> read_file_captions(const std::string& path);
+// The clips of `set` whose source file name is listed, with the listed caption
+// in place of their own (in list order; the first clip of a file when several
+// share it). InputError naming `path` for a listed file not in the set.
+RetrievalSet with_captions(const RetrievalSet& set, const DatasetCache& cache,
+                           const std::vector<std::pair<std::string, std::string>>& captions, const std::string& path);
 
 struct RetrievalOptions {
   int batch_size = 32;  // texts ranked against the motions of their batch (smaller groups: the group's size)
@@ -57,7 +71,7 @@ struct RetrievalRow {
   RPrecision within_plan; // batches inside one body plan (plans with fewer clips than the batch are skipped)
   bool has_within_plan = false;
   RPrecision masked;      // mixed batches, creature words of the captions masked
-  RPrecision floor;       // mixed batches, captions shuffled among the motions
+  RPrecision floor;       // mixed batches, captions shuffled among the motions (a new shuffle per repeat)
 };
 
 struct RetrievalTable {
@@ -73,7 +87,15 @@ RetrievalTable retrieval_table(EvaluatorSession& session, const DatasetCache& ca
 RetrievalTable retrieval_table(const RetrievalSet& set, const Embeddings& text, const Embeddings& masked_text,
                                const Embeddings& motion, const RetrievalOptions& options);
 
+// (N, D) embeddings of clips after a tokenizer: each clip (whole) encoded on its
+// own skeleton and decoded onto skeleton `targets[i]` of the cache (-1: its own,
+// a reconstruction), as `nec decode` does before writing BVH.
+at::Tensor embed_through_tokenizer(EvaluatorSession& session, tat::TokenizerSession& tokenizer, const DatasetCache& cache,
+                                   const std::vector<int>& clips, const std::vector<int>& targets);
+
 std::string to_markdown(const RetrievalTable& table);
+// {"r_precision": [{"mean", "half_width"}...], "mm_dist", "batches_per_repeat", "skipped_groups"}
+nlohmann::json to_json(const RPrecision& r);
 nlohmann::json to_json(const RetrievalTable& table);
 
 }  // namespace nec::evaluator

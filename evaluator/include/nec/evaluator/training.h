@@ -93,7 +93,8 @@ class EvaluatorTrainer {
   // train-split clips of `cache` that have captions. `piece_model_path`: the
   // piece model (`nec text train-tokenizer`), copied into checkpoints.
   // `vectors` may be null when neither encoder reads words. InputError when
-  // the train split has fewer captioned clips than a batch.
+  // the train split has fewer captioned clips than a batch, or a train or val
+  // caption is longer than model.text.max_pieces.
   EvaluatorTrainer(const EvaluatorTrainConfig& config, const DatasetCache& cache, std::string data_name,
                    owo::OwoPretrainer owo, const std::string& piece_model_path, const text::WordVectors* vectors,
                    const c10::Device& device, const train::Communicator* ranks = nullptr);
@@ -145,6 +146,9 @@ class EvaluatorTrainer {
   Evaluator best_model_{nullptr};  // a copy of the model at its best validation
   bool best_pending_ = false;      // best_model_ is newer than <out>/best
 };
+
+// Fewer captioned val clips than this: no validation (and no best model).
+constexpr size_t kMinValidationClips = 4;
 
 // The train-split (or other split) clips of `cache` that have at least one caption.
 std::vector<int> captioned_clips(const DatasetCache& cache, Split split);

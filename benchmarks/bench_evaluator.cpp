@@ -1,0 +1,247 @@
+// Cost of the text-motion evaluator on the CPU (configs/evaluator_cpu.json):
+// caption encoding, motion embedding and a retrieval query over a 10,000-clip index.
+//
+//   bench_evaluator [--configs=DIR] [benchmark flags]
+//
+// - BM_EncodeCaptions/threads:N: make_text_batch + the text encoder (eval mode)
+//   on batches of 32 corpus-like captions; counter captions_per_s. The piece
+//   model is trained at start on those captions (BPE, at most 300 pieces) and
+//   the word vectors are random 100-d rows for their words, written to a
+//   temporary folder.
+// - BM_EmbedMotions/joints:J/threads:N: OwO joint embeddings of the batch's
+//   skeletons (configs/owo_cpu.json's encoder, untrained, without names) +
+//   the motion encoder on 32 random 120-frame clips (4 s at 30 fps); counter clips_per_s.
+// - BM_RetrievalQuery/threads:N: one caption embedded and ranked against
+//   10,000 unit-length clip embeddings (RetrievalIndex::nearest_clips, k = 5),
+//   the index in memory; time per query. Goal: < 20 ms on 2 cores.
+// Each runs 5 repetitions (unless --benchmark_repetitions is given) and
+// reports mean, median, stddev, min and max of wall-clock and process CPU time.
+#include "nec/evaluator/evaluator.h"
+#include "nec/evaluator/retrieval_index.h"
+#include "nec/evaluator/training.h"
+#include "nec/owo/graph.h"
+#include "nec/owo/pretrain.h"
+#include "nec/tat/inference.h"
+#include "nec/tat/synthetic.h"
+#include "nec/text/caption_text.h"
+#include "nec/text/piece_model.h"
+#include "nec/text/text_encoder.h"
+#include "nec/text/word_vectors.h"
+
+#include <benchmark/benchmark.h>
+#include <nlohmann/json.hpp>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+constexpr int kDefaultRepetitions = 5;
+constexpr int64_t kBatch = 32;
+constexpr int64_t kClipFrames = 120;
+constexpr int64_t kIndexClips = 10000;
+
+std::string& configs_dir() {
+  static std::string dir = std::string(NEC_SOURCE_DIR) + "/configs";
+  return dir;
+}
+
+std::vector<std::string> captions() {
+  std::vector<std::string> out;
+  for (const char* creature : {"a dog", "a spider", "a person", "a dragon", "a snake", "someone", "a horse", "a bird"}) {
+    for (const char* verb : {"walks", "runs", "trots", "crawls", "turns", "jumps", "waves both hands", "bows politely"}) {
+      for (const char* how : {"forward", "to the left", "slowly and wearily", "quickly in a circle", "like an elderly person"}) {
+        out.push_back(std::string(creature) + " " + verb + " " + how);
+      }
+    }
+  }
+  return out;
+}
+
+// The piece model, word vectors and evaluator every benchmark shares.
+struct Setup {
+  fs::path folder;
+  std::optional<nec::text::PieceModel> pieces;
+  std::optional<nec::text::WordVectors> vectors;
+  nec::evaluator::Evaluator model{nullptr};
+  nec::owo::OwoPretrainer owo{nullptr};
+
+  Setup() {
+    folder = fs::temp_directory_path() / ("nec_bench_evaluator_" + std::to_string(::getpid()));
+    fs::create_directories(folder);
+    nec::text::PieceTrainOptions options;
+    options.vocab_size = 300;
+    nec::text::train_piece_model(captions(), options, (folder / "spm.model").string());
+    pieces.emplace(nec::text::PieceModel::load((folder / "spm.model").string()));
+    std::set<std::string> words;
+    for (const std::string& caption : captions()) {
+      for (const std::string& word : nec::text::caption_words(caption)) words.insert(word);
+    }
+    std::mt19937 rng(0);
+    std::normal_distribution<float> normal(0.f, 0.4f);
+    std::vector<float> rows;
+    for (size_t i = 0; i < words.size() * 100; ++i) rows.push_back(normal(rng));
+    nec::text::write_word_vectors((folder / "words.bin").string(), {words.begin(), words.end()}, rows, 100);
+    vectors.emplace(nec::text::WordVectors::load((folder / "words.bin").string()));
+
+    nec::evaluator::EvaluatorTrainConfig config =
+        nec::evaluator::read_evaluator_train_config(configs_dir() + "/evaluator_cpu.json");
+    std::ifstream owo_file(configs_dir() + "/owo_cpu.json");
+    nec::owo::OwoConfig owo_config;
+    owo_config.dim = nlohmann::json::parse(owo_file).at("encoder").at("dim").get<int64_t>();
+    owo_config.name_dim = 0;
+    torch::manual_seed(0);
+    owo = nec::owo::OwoPretrainer(owo_config, nec::owo::PretrainConfig{});
+    owo->eval();
+    config.model.motion.joint_embedding_dim = owo_config.dim;
+    config.model.text.vocab_size = pieces->vocab_size();
+    model = nec::evaluator::Evaluator(config.model);
+    model->eval();
+  }
+  ~Setup() { fs::remove_all(folder); }
+};
+
+Setup& setup() {
+  static Setup s;
+  return s;
+}
+
+void BM_EncodeCaptions(benchmark::State& state) {
+  torch::set_num_threads(static_cast<int>(state.range(0)));
+  Setup& s = setup();
+  const std::vector<std::string> all = captions();
+  size_t next = 0;
+  for (auto _ : state) {
+    std::vector<std::string> batch;
+    for (int64_t i = 0; i < kBatch; ++i) batch.push_back(all[next++ % all.size()]);
+    c10::InferenceMode inference;
+    const at::Tensor out = s.model->embed_text(
+        nec::text::make_text_batch(batch, *s.pieces, &*s.vectors, s.model->config().text, "bench"));
+    benchmark::DoNotOptimize(out.data_ptr());
+  }
+  state.counters["captions_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations() * kBatch), benchmark::Counter::kIsRate);
+}
+
+// One random skeleton of `joints` joints (parents before children).
+nec::Skeleton random_skeleton(int64_t joints, std::mt19937& rng) {
+  std::normal_distribution<double> offset(0.0, 0.1);
+  nec::Skeleton skeleton;
+  for (int64_t j = 0; j < joints; ++j) {
+    const int parent = j == 0 ? -1 : static_cast<int>(std::uniform_int_distribution<int64_t>(0, j - 1)(rng));
+    skeleton.add_joint("Joint" + std::to_string(j), parent,
+                       j == 0 ? nec::Vec3::Zero() : nec::Vec3(offset(rng), offset(rng), offset(rng)),
+                       j == 0 ? nec::ChannelLayout::position_rotations(nec::EulerOrder::ZXY)
+                              : nec::ChannelLayout::rotations(nec::EulerOrder::ZXY));
+  }
+  return skeleton;
+}
+
+void BM_EmbedMotions(benchmark::State& state) {
+  torch::set_num_threads(static_cast<int>(state.range(1)));
+  Setup& s = setup();
+  const int64_t joints = state.range(0);
+  std::mt19937 rng(1);
+  std::vector<nec::Skeleton> skeletons;
+  for (int64_t i = 0; i < kBatch; ++i) skeletons.push_back(random_skeleton(joints, rng));
+  const std::vector<std::vector<std::string>> names(kBatch, std::vector<std::string>(joints, "joint"));
+  torch::manual_seed(2);
+  const at::Tensor features = nec::tat::random_features(kBatch, kClipFrames, joints);
+  const at::Tensor joint_mask = torch::ones({kBatch, joints}, torch::kBool);
+  const at::Tensor frame_mask = torch::ones({kBatch, kClipFrames}, torch::kBool);
+  for (auto _ : state) {
+    c10::InferenceMode inference;
+    const at::Tensor embeddings = nec::tat::embed_skeletons(*s.owo->encoder, skeletons, names, nullptr);
+    const at::Tensor out = s.model->embed_motion(features, joint_mask, frame_mask, embeddings);
+    benchmark::DoNotOptimize(out.data_ptr());
+  }
+  state.counters["clips_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations() * kBatch), benchmark::Counter::kIsRate);
+}
+
+void BM_RetrievalQuery(benchmark::State& state) {
+  torch::set_num_threads(static_cast<int>(state.range(0)));
+  Setup& s = setup();
+  nec::evaluator::RetrievalIndex index;
+  index.dim = static_cast<int>(s.model->config().motion.output_dim);
+  torch::manual_seed(3);
+  const at::Tensor rows = torch::nn::functional::normalize(
+      torch::randn({kIndexClips, index.dim}), torch::nn::functional::NormalizeFuncOptions().dim(1));
+  index.clip_embeddings.assign(rows.data_ptr<float>(), rows.data_ptr<float>() + rows.numel());
+  for (int64_t i = 0; i < kIndexClips; ++i) index.clips.push_back(static_cast<int>(i));
+  const std::vector<std::string> all = captions();
+  size_t next = 0;
+  for (auto _ : state) {
+    c10::InferenceMode inference;
+    const at::Tensor query = s.model->embed_text(nec::text::make_text_batch(
+        {all[next++ % all.size()]}, *s.pieces, &*s.vectors, s.model->config().text, "query"));
+    const std::vector<nec::evaluator::Match> top = index.nearest_clips(query, 5, {});
+    benchmark::DoNotOptimize(top.data());
+  }
+}
+
+double smallest(const std::vector<double>& values) { return *std::min_element(values.begin(), values.end()); }
+double largest(const std::vector<double>& values) { return *std::max_element(values.begin(), values.end()); }
+
+template <typename Registered>
+void common(Registered* b, int64_t iterations) {
+  b->Iterations(iterations)
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime()
+      ->MeasureProcessCPUTime()
+      ->ComputeStatistics("min", smallest)
+      ->ComputeStatistics("max", largest)
+      ->DisplayAggregatesOnly(true);
+}
+
+void register_all() {
+  common(benchmark::RegisterBenchmark("BM_EncodeCaptions", BM_EncodeCaptions)->ArgNames({"threads"})->Arg(1)->Arg(2), 20);
+  for (const int64_t joints : {22, 100}) {
+    common(benchmark::RegisterBenchmark("BM_EmbedMotions", BM_EmbedMotions)
+               ->ArgNames({"joints", "threads"})
+               ->Args({joints, 1})
+               ->Args({joints, 2}),
+           joints == 22 ? 5 : 2);
+  }
+  common(benchmark::RegisterBenchmark("BM_RetrievalQuery", BM_RetrievalQuery)->ArgNames({"threads"})->Arg(1)->Arg(2), 50);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<char*> args(argv, argv + argc);
+  std::string repetitions = "--benchmark_repetitions=" + std::to_string(kDefaultRepetitions);
+  bool has_repetitions = false;
+  for (char* arg : args) has_repetitions |= std::strncmp(arg, "--benchmark_repetitions", 23) == 0;
+  if (!has_repetitions) args.push_back(repetitions.data());
+  int count = static_cast<int>(args.size());
+  benchmark::Initialize(&count, args.data());
+  for (int i = 1; i < count; ++i) {
+    if (std::strncmp(args[i], "--configs=", 10) == 0) {
+      configs_dir() = args[i] + 10;
+    } else {
+      std::fprintf(stderr, "bench_evaluator: unknown argument '%s' (--configs=DIR or --benchmark_* flags)\n", args[i]);
+      return 2;
+    }
+  }
+  try {
+    setup();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_evaluator: %s\n", e.what());
+    return 1;
+  }
+  register_all();
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,245 @@
+// Generated motion against real motion: R-Precision, MM-Dist, FID, Diversity,
+// Multimodality, Coverage / Novelty AUC and jitter, per group.
+#include "nec/evaluator/t2m.h"
+
+#include "nec/evaluator/retrieval.h"
+#include "nec/motion/captions.h"
+#include "nec/motion/error.h"
+#include "nec/motion/kinematics.h"
+#include "nec/text/caption_text.h"
+
+#include <fmt/format.h>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+
+namespace nec::evaluator {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+
+
+// Mean jitter of clips given as (skeleton, motion); clips under 4 frames are left out (NaN when none is left).
+double mean_jitter(const std::vector<std::pair<const Skeleton*, const Motion*>>& clips) {
+  double sum = 0;
+  int count = 0;
+  std::vector<Vec3> positions;
+  for (const auto& [skeleton, motion] : clips) {
+    if (motion->frame_count < 4) continue;
+    joint_positions(*skeleton, *motion, positions);
+    std::vector<double> flat;
+    flat.reserve(positions.size() * 3);
+    for (const Vec3& p : positions) flat.insert(flat.end(), {p.x(), p.y(), p.z()});
+    sum += jitter(flat, motion->frame_count, motion->joint_count, motion->fps);
+    ++count;
+  }
+  return count > 0 ? sum / count : kNan;
+}
+
+std::string number(double value, const char* format = "{:.3f}") {
+  return std::isnan(value) ? "—" : fmt::format(fmt::runtime(format), value);
+}
+
+nlohmann::json maybe(double value) { return std::isnan(value) ? nlohmann::json() : nlohmann::json(value); }
+
+}  // namespace
+
+void T2mOptions::validate() const {
+  if (batch_size < 2 || repeats < 1) throw std::invalid_argument("T2mOptions: batch_size must be >= 2 and repeats >= 1");
+  if (diversity_pairs < 1 || multimodality_pairs < 1) throw std::invalid_argument("T2mOptions: pairs must be >= 1");
+  if (max_window < 1 || window_stride < 1) throw std::invalid_argument("T2mOptions: max_window and window_stride must be >= 1");
+}
+
+std::vector<GeneratedClip> read_generated(const std::string& dir, double fps, UpAxis up) {
+  if (!fs::is_directory(dir)) throw InputError(dir, 0, "is not a folder of generated BVH files");
+  std::vector<std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (entry.is_regular_file() && entry.path().extension() == ".bvh") files.push_back(entry.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw InputError(dir, 0, "has no .bvh files");
+  std::vector<GeneratedClip> out;
+  for (const std::string& file : files) {
+    GeneratedClip clip;
+    clip.path = file;
+    const fs::path relative = fs::relative(file, dir);
+    clip.group = relative.has_parent_path() ? relative.begin()->string() : "";
+    CaptionSources sources;
+    sources.bandai = false;
+    clip.captions = captions_for(file, sources);
+    if (clip.captions.empty()) {
+      throw InputError(file, 0, "has no caption: write the caption it was generated from into " +
+                                    fs::path(file).replace_extension(".txt").string());
+    }
+    PreprocessOptions options;
+    options.target_fps = fps;
+    options.up = up;
+    clip.prepared = preprocess_file(file, options);
+    out.push_back(std::move(clip));
+  }
+  return out;
+}
+
+T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedClip>& generated, const DatasetCache& cache,
+                       Split split, const T2mOptions& options) {
+  options.validate();
+  T2mReport report;
+  report.split = std::string(split_name(split));
+  const RetrievalSet reference = retrieval_set(cache, split);
+
+  // Embeddings: every generated clip and its first caption, every reference clip.
+  std::vector<at::Tensor> parts;
+  std::vector<std::string> captions;
+  for (const GeneratedClip& clip : generated) {
+    parts.push_back(session.embed_clip(clip.prepared));
+    captions.push_back(clip.captions.front());
+  }
+  const Embeddings motion = to_embeddings(torch::cat(parts));
+  const Embeddings text = to_embeddings(session.embed_captions(captions, "generated captions"));
+  const Embeddings reference_motion = to_embeddings(session.embed_clips(cache, reference.clips));
+
+  std::map<std::string, std::vector<int>> groups;
+  for (size_t i = 0; i < generated.size(); ++i) {
+    if (!generated[i].group.empty()) groups[generated[i].group].push_back(static_cast<int>(i));
+    groups["all"].push_back(static_cast<int>(i));
+  }
+  std::vector<std::string> names;
+  for (const auto& [name, rows] : groups) {
+    if (name != "all") names.push_back(name);
+  }
+  names.push_back("all");
+  for (const std::string& name : names) {
+    const std::vector<int>& rows = groups[name];
+    std::vector<int> reference_rows;
+    for (size_t r = 0; r < reference.clips.size(); ++r) {
+      if (reference.datasets[r] == name) reference_rows.push_back(static_cast<int>(r));
+    }
+    if (reference_rows.empty()) {
+      for (size_t r = 0; r < reference.clips.size(); ++r) reference_rows.push_back(static_cast<int>(r));
+    }
+    T2mRow row;
+    row.name = name;
+    row.generated = static_cast<int>(rows.size());
+    row.reference = static_cast<int>(reference_rows.size());
+    const Embeddings g = rows_of(motion, rows), ref = rows_of(reference_motion, reference_rows);
+    if (rows.size() >= 2) {
+      RPrecisionOptions r;
+      r.batch_size = std::min<int>(options.batch_size, row.generated);
+      r.repeats = options.repeats;
+      r.seed = options.seed;
+      r.top_k = std::min(3, r.batch_size);
+      row.batch_size = r.batch_size;
+      row.precision = r_precision(rows_of(text, rows), g, r);
+      row.has_precision = true;
+      row.diversity = diversity(g, {options.diversity_pairs, options.seed});
+    } else {
+      row.diversity = kNan;
+    }
+    row.fid = rows.size() >= 2 && ref.rows() >= 2 ? fid(g, ref) : kNan;
+    row.reference_diversity = ref.rows() >= 2 ? diversity(ref, {options.diversity_pairs, options.seed}) : kNan;
+
+    // Multimodality: the samples of each caption.
+    std::map<std::string, std::vector<int>> by_caption;
+    for (const int i : rows) by_caption[text::normalize_caption(captions[static_cast<size_t>(i)])].push_back(i);
+    std::vector<Embeddings> samples;
+    for (const auto& [caption, items] : by_caption) {
+      if (items.size() >= 2) samples.push_back(rows_of(motion, items));
+    }
+    row.multimodality_captions = static_cast<int>(samples.size());
+    row.multimodality = samples.empty() ? kNan : multimodality(samples, {options.multimodality_pairs, options.seed});
+
+    // Coverage and Novelty of each generated clip against the reference clips that carry its caption.
+    double coverage = 0, novelty = 0;
+    for (const int i : rows) {
+      const GeneratedClip& clip = generated[static_cast<size_t>(i)];
+      const std::string wanted = text::normalize_caption(clip.captions.front());
+      for (const int r : reference_rows) {
+        const CacheClip& real = cache.clips[static_cast<size_t>(reference.clips[static_cast<size_t>(r)])];
+        const bool same = std::any_of(real.captions.begin(), real.captions.end(),
+                                      [&](const std::string& c) { return text::normalize_caption(c) == wanted; });
+        if (!same) continue;
+        const int window = std::min<int>(window_length(real.frame_count, clip.prepared.clip.motion.frame_count,
+                                                       options.max_window),
+                                         static_cast<int>(session.loaded().model->config().motion.max_frames()));
+        const Embeddings real_windows = to_embeddings(session.embed_windows(
+            cache, reference.clips[static_cast<size_t>(r)], window_starts(real.frame_count, window, options.window_stride), window));
+        const Embeddings generated_windows = to_embeddings(session.embed_clip_windows(
+            clip.prepared, window_starts(clip.prepared.clip.motion.frame_count, window, options.window_stride), window));
+        const CoverageNovelty cn = coverage_novelty(real_windows, generated_windows);
+        coverage += cn.coverage_auc;
+        novelty += cn.novelty_auc;
+        ++row.coverage_pairs;
+      }
+    }
+    row.coverage_auc = row.coverage_pairs > 0 ? coverage / row.coverage_pairs : kNan;
+    row.novelty_auc = row.coverage_pairs > 0 ? novelty / row.coverage_pairs : kNan;
+
+    std::vector<std::pair<const Skeleton*, const Motion*>> generated_clips, reference_clips;
+    for (const int i : rows) {
+      const Clip& c = generated[static_cast<size_t>(i)].prepared.clip;
+      generated_clips.emplace_back(&c.skeleton, &c.motion);
+    }
+    std::vector<Clip> decoded;
+    decoded.reserve(reference_rows.size());
+    for (const int r : reference_rows) decoded.push_back(cache.clip(reference.clips[static_cast<size_t>(r)]));
+    for (const Clip& c : decoded) reference_clips.emplace_back(&c.skeleton, &c.motion);
+    row.jitter = mean_jitter(generated_clips);
+    row.reference_jitter = mean_jitter(reference_clips);
+    report.rows.push_back(std::move(row));
+  }
+  return report;
+}
+
+std::string to_markdown(const T2mReport& report) {
+  std::string out = fmt::format(
+      "| group | generated / {} clips | R@1 / R@2 / R@3 (batch) | MM-Dist | FID | Diversity (real) | Multimodality "
+      "(captions) | Coverage AUC | Novelty AUC | jitter (real) |\n|---|---|---|---|---|---|---|---|---|---|\n",
+      report.split);
+  for (const T2mRow& row : report.rows) {
+    std::string precision = "—", mm_dist = "—";
+    if (row.has_precision) {
+      precision.clear();
+      for (const Interval& i : row.precision.top_k) precision += (precision.empty() ? "" : " / ") + fmt::format("{:.3f}", i.mean);
+      precision += fmt::format(" ({})", row.batch_size);
+      mm_dist = number(row.precision.mm_dist.mean);
+    }
+    out += fmt::format("| {} | {} / {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} ({}) |\n", row.name, row.generated,
+                       row.reference, precision, mm_dist, number(row.fid), number(row.diversity),
+                       number(row.reference_diversity), number(row.multimodality), row.multimodality_captions,
+                       number(row.coverage_auc), number(row.novelty_auc), number(row.jitter, "{:.1f}"),
+                       number(row.reference_jitter, "{:.1f}"));
+  }
+  return out;
+}
+
+nlohmann::json to_json(const T2mReport& report) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const T2mRow& row : report.rows) {
+    nlohmann::json r = {{"name", row.name},
+                        {"generated", row.generated},
+                        {"reference", row.reference},
+                        {"fid", maybe(row.fid)},
+                        {"diversity", maybe(row.diversity)},
+                        {"reference_diversity", maybe(row.reference_diversity)},
+                        {"multimodality", maybe(row.multimodality)},
+                        {"multimodality_captions", row.multimodality_captions},
+                        {"coverage_auc", maybe(row.coverage_auc)},
+                        {"novelty_auc", maybe(row.novelty_auc)},
+                        {"coverage_pairs", row.coverage_pairs},
+                        {"jitter", maybe(row.jitter)},
+                        {"reference_jitter", maybe(row.reference_jitter)}};
+    if (row.has_precision) {
+      r["precision"] = to_json(row.precision);
+      r["batch_size"] = row.batch_size;
+    }
+    rows.push_back(std::move(r));
+  }
+  return {{"split", report.split}, {"rows", rows}};
+}
+
+}  // namespace nec::evaluator
