@@ -54,19 +54,17 @@ int run_eval_retrieval(int argc, char** argv) {
   options.repeats = static_cast<int>(cli.integer("--repeats"));
   nlohmann::json out;
   if (cli.value("--captions").empty()) {
-    evaluator::RetrievalTable table = evaluator::retrieval_table(session, cache, set, options);
+    const evaluator::RetrievalEmbeddings real = evaluator::embed_retrieval_set(session, cache, set);
+    evaluator::RetrievalTable table = evaluator::retrieval_table(set, real, options);
     table.split = cli.value("--split");
     fmt::print("{}", evaluator::to_markdown(table));
     out = evaluator::to_json(table);
     if (!cli.value("--tokenizer").empty()) {
       tat::TokenizerSession tokenizer = tat::open_tokenizer_session(cli.value("--tokenizer"), cli.value("--glove"), -1);
-      std::vector<std::string> masked;
-      for (const std::string& caption : set.captions) masked.push_back(evaluator::mask_creature_words(text::normalize_caption(caption)));
-      const evaluator::Embeddings text = evaluator::to_embeddings(session.embed_captions(set.captions, "cache captions"));
-      const evaluator::Embeddings masked_text = evaluator::to_embeddings(session.embed_captions(masked, "masked captions"));
-      const evaluator::Embeddings reconstructed = evaluator::to_embeddings(evaluator::embed_through_tokenizer(
+      evaluator::RetrievalEmbeddings reconstructed = real;  // the same captions, the motions after the tokenizer
+      reconstructed.motion = evaluator::to_embeddings(evaluator::embed_through_tokenizer(
           session, tokenizer, cache, set.clips, std::vector<int>(set.clips.size(), -1)));
-      evaluator::RetrievalTable recon = evaluator::retrieval_table(set, text, masked_text, reconstructed, options);
+      evaluator::RetrievalTable recon = evaluator::retrieval_table(set, reconstructed, options);
       recon.split = cli.value("--split") + ", reconstructed by " + cli.value("--tokenizer");
       fmt::print("\n{}", evaluator::to_markdown(recon));
       out = {{"real", out}, {"reconstructed", evaluator::to_json(recon)}};
@@ -96,13 +94,10 @@ int run_eval_retrieval(int argc, char** argv) {
           }
         }
         if (moved.clips.size() < 2) throw UsageError("--transfer: fewer than 2 captioned clips to transfer");
-        std::vector<std::string> moved_masked;
-        for (const std::string& caption : moved.captions) moved_masked.push_back(evaluator::mask_creature_words(caption));
-        evaluator::RetrievalTable transfer = evaluator::retrieval_table(
-            moved, evaluator::to_embeddings(session.embed_captions(moved.captions, "renamed captions")),
-            evaluator::to_embeddings(session.embed_captions(moved_masked, "masked captions")),
-            evaluator::to_embeddings(evaluator::embed_through_tokenizer(session, tokenizer, cache, moved.clips, targets)),
-            options);
+        evaluator::RetrievalEmbeddings transferred = evaluator::embed_set_captions(session, moved);
+        transferred.motion =
+            evaluator::to_embeddings(evaluator::embed_through_tokenizer(session, tokenizer, cache, moved.clips, targets));
+        evaluator::RetrievalTable transfer = evaluator::retrieval_table(moved, transferred, options);
         transfer.split = cli.value("--split") + ", transferred by " + cli.value("--tokenizer");
         fmt::print("\n{}", evaluator::to_markdown(transfer));
         out["transferred"] = evaluator::to_json(transfer);
@@ -115,8 +110,11 @@ int run_eval_retrieval(int argc, char** argv) {
     for (size_t i = 0; i < own.clips.size(); ++i) {
       own.captions[i] = cache.clips[static_cast<size_t>(own.clips[i])].captions.front();
     }
-    evaluator::RetrievalTable own_table = evaluator::retrieval_table(session, cache, own, options);
-    evaluator::RetrievalTable given_table = evaluator::retrieval_table(session, cache, given, options);
+    const evaluator::RetrievalEmbeddings own_embeddings = evaluator::embed_retrieval_set(session, cache, own);
+    evaluator::RetrievalEmbeddings given_embeddings = evaluator::embed_set_captions(session, given);
+    given_embeddings.motion = own_embeddings.motion;  // the same clips
+    evaluator::RetrievalTable own_table = evaluator::retrieval_table(own, own_embeddings, options);
+    evaluator::RetrievalTable given_table = evaluator::retrieval_table(given, given_embeddings, options);
     own_table.split = cli.value("--split") + " (own captions)";
     given_table.split = cli.value("--split") + " (" + file + ")";
     fmt::print("{}\n{}", evaluator::to_markdown(own_table), evaluator::to_markdown(given_table));

@@ -71,7 +71,7 @@ Constructed constructed(int n, uint64_t seed, double noise) {
 TEST(Retrieval, TheTableFindsExactMatchesAndItsFloorStaysAtChance) {
   const Constructed c = constructed(256, 4, 0.0);
   evaluator::RetrievalOptions options;
-  const evaluator::RetrievalTable table = evaluator::retrieval_table(c.set, c.text, c.text, c.motion, options);
+  const evaluator::RetrievalTable table = evaluator::retrieval_table(c.set, {c.text, c.text, c.motion}, options);
   ASSERT_EQ(table.rows.size(), 3u);  // dog, zoo, all
   EXPECT_EQ(table.rows[0].name, "dog");
   EXPECT_EQ(table.rows[2].name, "all");
@@ -92,7 +92,7 @@ TEST(Retrieval, TheTableFindsExactMatchesAndItsFloorStaysAtChance) {
 
 TEST(Retrieval, SmallDatasetsUseTheirSizeAsTheBatchAndSayIt) {
   const Constructed c = constructed(20, 5, 0.0);
-  const evaluator::RetrievalTable table = evaluator::retrieval_table(c.set, c.text, c.text, c.motion, {});
+  const evaluator::RetrievalTable table = evaluator::retrieval_table(c.set, {c.text, c.text, c.motion}, {});
   ASSERT_EQ(table.rows.size(), 3u);
   EXPECT_EQ(table.rows[0].batch_size, 10);  // dog: 10 clips
   EXPECT_EQ(table.rows[2].batch_size, 20);

@@ -19,7 +19,7 @@
 namespace nec::evaluator {
 namespace {
 
-// Rows of `all` picked by `rows`.
+constexpr size_t kDecodedBatch = 32;  // decoded clips embedded together
 
 // R-Precision with the captions shuffled among the motions: a new shuffle for
 // every repeat (one fixed shuffle would be one draw of chance, not chance).
@@ -115,6 +115,7 @@ at::Tensor embed_through_tokenizer(EvaluatorSession& session, tat::TokenizerSess
   };
   const int max_frames = static_cast<int>(session.loaded().model->config().motion.max_frames());
   std::vector<at::Tensor> parts;
+  std::vector<MotionInput> decoded;
   for (size_t i = 0; i < clips.size(); ++i) {
     const CacheClip& clip = cache.clips.at(static_cast<size_t>(clips[i]));
     const int target = targets[i] < 0 ? clip.skeleton : targets[i];
@@ -123,12 +124,15 @@ at::Tensor embed_through_tokenizer(EvaluatorSession& session, tat::TokenizerSess
     const Features source = crop_at_start_heading(cache, clips[i], (clip.frame_count - count) / 2, count);
     c10::InferenceMode inference;
     const at::Tensor codes = tat::encode_clip(*tokenizer.model.tokenizer, source, embedding_of(clip.skeleton), tokenizer.windows);
-    MotionInput decoded{tat::decode_clip(*tokenizer.model.tokenizer, codes, count, embedding_of(target), skeleton.skeleton,
-                                         cache.fps, tokenizer.windows),
-                        &skeleton.skeleton, &skeleton.canonical_names};
-    parts.push_back(session.embed_motion_inputs({std::move(decoded)}));
+    decoded.push_back({tat::decode_clip(*tokenizer.model.tokenizer, codes, count, embedding_of(target), skeleton.skeleton,
+                                        cache.fps, tokenizer.windows),
+                       &skeleton.skeleton, &skeleton.canonical_names});
+    if (decoded.size() == kDecodedBatch || i + 1 == clips.size()) {
+      parts.push_back(session.embed_motion_inputs(decoded));
+      decoded.clear();
+    }
   }
-  return torch::cat(parts);
+  return parts.empty() ? torch::zeros({0, session.dim()}) : torch::cat(parts);
 }
 
 RetrievalSet retrieval_set(const DatasetCache& cache, Split split) {
@@ -187,8 +191,11 @@ RetrievalSet with_captions(const RetrievalSet& set, const DatasetCache& cache,
   return out;
 }
 
-RetrievalTable retrieval_table(const RetrievalSet& set, const Embeddings& text, const Embeddings& masked_text,
-                               const Embeddings& motion, const RetrievalOptions& options) {
+RetrievalTable retrieval_table(const RetrievalSet& set, const RetrievalEmbeddings& embeddings,
+                               const RetrievalOptions& options) {
+  const Embeddings& text = embeddings.text;
+  const Embeddings& masked_text = embeddings.masked_text;
+  const Embeddings& motion = embeddings.motion;
   RetrievalTable table;
   std::map<std::string, std::vector<int>> groups;
   for (size_t i = 0; i < set.clips.size(); ++i) {
@@ -229,14 +236,17 @@ RetrievalTable retrieval_table(const RetrievalSet& set, const Embeddings& text, 
   return table;
 }
 
-RetrievalTable retrieval_table(EvaluatorSession& session, const DatasetCache& cache, const RetrievalSet& set,
-                               const RetrievalOptions& options) {
+RetrievalEmbeddings embed_set_captions(EvaluatorSession& session, const RetrievalSet& set) {
   std::vector<std::string> masked;
   for (const std::string& caption : set.captions) masked.push_back(mask_creature_words(text::normalize_caption(caption)));
-  const Embeddings text = to_embeddings(session.embed_captions(set.captions, "cache captions"));
-  const Embeddings masked_text = to_embeddings(session.embed_captions(masked, "masked cache captions"));
-  const Embeddings motion = to_embeddings(session.embed_clips(cache, set.clips));
-  return retrieval_table(set, text, masked_text, motion, options);
+  return {to_embeddings(session.embed_captions(set.captions, "captions")),
+          to_embeddings(session.embed_captions(masked, "masked captions")), Embeddings()};
+}
+
+RetrievalEmbeddings embed_retrieval_set(EvaluatorSession& session, const DatasetCache& cache, const RetrievalSet& set) {
+  RetrievalEmbeddings out = embed_set_captions(session, set);
+  out.motion = to_embeddings(session.embed_clips(cache, set.clips));
+  return out;
 }
 
 nlohmann::json to_json(const RPrecision& r) {

@@ -23,19 +23,24 @@ namespace {
 namespace fs = std::filesystem;
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 
+// The jitter of one clip; NaN under 4 frames.
+double clip_jitter(const Clip& clip) {
+  if (clip.motion.frame_count < 4) return kNan;
+  std::vector<Vec3> positions;
+  joint_positions(clip.skeleton, clip.motion, positions);
+  std::vector<double> flat;
+  flat.reserve(positions.size() * 3);
+  for (const Vec3& p : positions) flat.insert(flat.end(), {p.x(), p.y(), p.z()});
+  return jitter(flat, clip.motion.frame_count, clip.motion.joint_count, clip.motion.fps);
+}
 
-// Mean jitter of clips given as (skeleton, motion); clips under 4 frames are left out (NaN when none is left).
-double mean_jitter(const std::vector<std::pair<const Skeleton*, const Motion*>>& clips) {
+// Mean of values[rows], leaving out NaN (NaN when nothing is left).
+double mean_of(const std::vector<double>& values, const std::vector<int>& rows) {
   double sum = 0;
   int count = 0;
-  std::vector<Vec3> positions;
-  for (const auto& [skeleton, motion] : clips) {
-    if (motion->frame_count < 4) continue;
-    joint_positions(*skeleton, *motion, positions);
-    std::vector<double> flat;
-    flat.reserve(positions.size() * 3);
-    for (const Vec3& p : positions) flat.insert(flat.end(), {p.x(), p.y(), p.z()});
-    sum += jitter(flat, motion->frame_count, motion->joint_count, motion->fps);
+  for (const int r : rows) {
+    if (std::isnan(values[static_cast<size_t>(r)])) continue;
+    sum += values[static_cast<size_t>(r)];
     ++count;
   }
   return count > 0 ? sum / count : kNan;
@@ -102,6 +107,10 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
   const Embeddings motion = to_embeddings(torch::cat(parts));
   const Embeddings text = to_embeddings(session.embed_captions(captions, "generated captions"));
   const Embeddings reference_motion = to_embeddings(session.embed_clips(cache, reference.clips));
+  // Jitter of every clip, once.
+  std::vector<double> generated_jitter, reference_jitter;
+  for (const GeneratedClip& clip : generated) generated_jitter.push_back(clip_jitter(clip.prepared.clip));
+  for (const int clip : reference.clips) reference_jitter.push_back(clip_jitter(cache.clip(clip)));
 
   std::map<std::string, std::vector<int>> groups;
   for (size_t i = 0; i < generated.size(); ++i) {
@@ -179,17 +188,8 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
     row.coverage_auc = row.coverage_pairs > 0 ? coverage / row.coverage_pairs : kNan;
     row.novelty_auc = row.coverage_pairs > 0 ? novelty / row.coverage_pairs : kNan;
 
-    std::vector<std::pair<const Skeleton*, const Motion*>> generated_clips, reference_clips;
-    for (const int i : rows) {
-      const Clip& c = generated[static_cast<size_t>(i)].prepared.clip;
-      generated_clips.emplace_back(&c.skeleton, &c.motion);
-    }
-    std::vector<Clip> decoded;
-    decoded.reserve(reference_rows.size());
-    for (const int r : reference_rows) decoded.push_back(cache.clip(reference.clips[static_cast<size_t>(r)]));
-    for (const Clip& c : decoded) reference_clips.emplace_back(&c.skeleton, &c.motion);
-    row.jitter = mean_jitter(generated_clips);
-    row.reference_jitter = mean_jitter(reference_clips);
+    row.jitter = mean_of(generated_jitter, rows);
+    row.reference_jitter = mean_of(reference_jitter, reference_rows);
     report.rows.push_back(std::move(row));
   }
   return report;

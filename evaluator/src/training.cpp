@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <stdexcept>
 
 namespace nec::evaluator {
@@ -167,12 +168,14 @@ train::LossTerms EvaluatorTrainer::step(int64_t step) {
     const at::Tensor joints = tat::embed_skeletons(*owo_->encoder, batch.skeletons, batch.canonical_names, vectors_).clone();
     const text::TextBatch captions =
         text::make_text_batch(batch.captions, pieces_, vectors_, config_.model.text, data_name_ + " captions");
-    std::vector<std::string> normalized;
-    for (const std::string& caption : batch.captions) normalized.push_back(text::normalize_caption(caption));
-    at::Tensor same = torch::zeros({batch.size, batch.size}, torch::kBool);
-    for (int i = 0; i < batch.size; ++i) {
-      for (int j = 0; j < batch.size; ++j) same[i][j] = normalized[static_cast<size_t>(i)] == normalized[static_cast<size_t>(j)];
+    // Items whose normalized captions are equal match each other: compare caption ids, not strings, B^2 times.
+    std::map<std::string, int64_t> caption_ids;
+    std::vector<int64_t> ids;
+    for (const std::string& caption : batch.captions) {
+      ids.push_back(caption_ids.emplace(text::normalize_caption(caption), static_cast<int64_t>(caption_ids.size())).first->second);
     }
+    const at::Tensor id_tensor = torch::tensor(ids, torch::kInt64);
+    const at::Tensor same = id_tensor.unsqueeze(1) == id_tensor.unsqueeze(0);
     const at::Tensor motion = model_->embed_motion(x.features, x.joint_mask, x.frame_mask, joints);
     const at::Tensor text = model_->embed_text(captions.to(device_));
     const at::Tensor loss = contrastive_loss(motion, text, model_->logit_scale(), same.to(device_));

@@ -3,7 +3,7 @@
 // shortcuts are measured with.
 //
 //   RetrievalSet set = retrieval_set(cache, Split::Test);          // clips with captions, their groups
-//   RetrievalTable table = retrieval_table(session, cache, set, {});
+//   RetrievalTable table = retrieval_table(set, embed_retrieval_set(session, cache, set), {});
 //   std::cout << to_markdown(table);
 //
 // Shortcuts: captions name the creature and the skeleton gives it away, so a
@@ -79,13 +79,17 @@ struct RetrievalTable {
   std::string split;
 };
 
-// Embeds the set once (motions, captions, masked captions) and fills one row
-// per dataset and one for all of them.
-RetrievalTable retrieval_table(EvaluatorSession& session, const DatasetCache& cache, const RetrievalSet& set,
+// The set's embeddings: its captions, the captions with creature words masked, and its clips.
+struct RetrievalEmbeddings {
+  Embeddings text, masked_text, motion;  // (N, D) each
+};
+RetrievalEmbeddings embed_retrieval_set(EvaluatorSession& session, const DatasetCache& cache, const RetrievalSet& set);
+// The captions' part alone (motion left empty), for motions embedded another way.
+RetrievalEmbeddings embed_set_captions(EvaluatorSession& session, const RetrievalSet& set);
+
+// One row per dataset and one for all of them.
+RetrievalTable retrieval_table(const RetrievalSet& set, const RetrievalEmbeddings& embeddings,
                                const RetrievalOptions& options);
-// The rows of `table` for given text and motion embeddings (what retrieval_table runs after embedding).
-RetrievalTable retrieval_table(const RetrievalSet& set, const Embeddings& text, const Embeddings& masked_text,
-                               const Embeddings& motion, const RetrievalOptions& options);
 
 // (N, D) embeddings of clips after a tokenizer: each clip (whole) encoded on its
 // own skeleton and decoded onto skeleton `targets[i]` of the cache (-1: its own,
