@@ -6,6 +6,7 @@
 #include "nec/motion/bvh.h"
 #include "nec/motion/names.h"
 #include "nec/motion/preprocess.h"
+#include "nec/motion/rest_pose.h"
 
 #include <fmt/format.h>
 
@@ -93,8 +94,10 @@ int run_convert(int argc, char** argv) {
 int run_normalize(int argc, char** argv) {
   CommandLine cli("nec normalize",
                   "Apply the unified preprocessing (dummy root merge, root-only translation, unit diameter, +Y up,\n"
-                  "frame 0 facing +Z, corpus frame rate) and write the result; prints what was changed.");
+                  "frame 0 facing +Z, corpus frame rate, the canonical rest pose: the clip's mean pose with\n"
+                  "world-aligned joint frames) and write the result; prints what was changed.");
   cli.positional("IN.bvh", "input BVH file");
+  cli.flag("--keep-rest", "keep the file's rest pose and joint frames (what the models see is the canonical rest)");
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--fps", "FPS", "30", "target frame rate; 0 keeps the file's");
   cli.option("--up", "AXIS", "auto", "up axis of the input: auto, y or z");
@@ -104,6 +107,7 @@ int run_normalize(int argc, char** argv) {
   options.target_fps = cli.number("--fps");
   if (options.target_fps < 0) throw UsageError("--fps must be >= 0");
   options.up = cli.up_axis("--up");
+  options.canonical_rest = !cli.is_set("--keep-rest");
   const std::string path = cli.positional_value("IN.bvh");
   const PreparedClip prepared = preprocess(read_bvh(path), path, options);
   for (const std::string& change : prepared.report.changes) fmt::print("{}: {}\n", path, change);
@@ -121,31 +125,37 @@ int run_augment(int argc, char** argv) {
   CommandLine cli("nec augment",
                   "Write a rig-augmented copy of a BVH file. Kinds: rest (a random frame becomes the rest pose),\n"
                   "length (bone lengths x0.8-1.2 per body part, left = right), joints (remove or subdivide joints\n"
-                  "at random), remove (remove distal or zero-length joints), subdivide (insert joints into bones).\n"
+                  "at random), remove (remove distal or zero-length joints), subdivide (insert joints into bones),\n"
+                  "axes (the joint-orient convention of Maya / MotionBuilder exports: every joint's +X along its\n"
+                  "bone, the rest pose a straight line), axes-random (a random frame per joint).\n"
                   "Every kind keeps the world positions of the joints it keeps, except length.");
   cli.positional("IN.bvh", "input BVH file");
-  cli.option("--kind", "KIND", "rest", "rest | length | joints | remove | subdivide");
+  cli.option("--kind", "KIND", "rest", "rest | length | joints | remove | subdivide | axes | axes-random");
   cli.option("--seed", "N", "0", "random seed; the same seed gives the same rig");
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.example("nec augment walk.bvh --kind length --seed 3 -o walk_long_legs.bvh");
   if (!cli.parse(argc, argv)) return 0;
   const std::string kind_name = cli.value("--kind");
   SplitMix64 rng(static_cast<uint64_t>(cli.integer("--seed")));
-  AugmentKind kind;
+  // Joint axes are not a training augmentation: preprocessing takes every convention to the canonical rest.
+  const bool axes = kind_name == "axes" || kind_name == "axes-random";
+  AugmentKind kind = AugmentKind::RestPose;
   if (kind_name == "joints") {
     kind = rng.chance(0.5) ? AugmentKind::JointRemoval : AugmentKind::Subdivision;
-  } else {
+  } else if (!axes) {
     try {
       kind = augment_kind_from_string(kind_name);
     } catch (const std::invalid_argument&) {
-      throw UsageError("--kind must be rest, length, joints, remove or subdivide, got '" + kind_name + "'");
+      throw UsageError("--kind must be rest, length, joints, remove, subdivide, axes or axes-random, got '" +
+                       kind_name + "'");
     }
   }
   const std::string path = cli.positional_value("IN.bvh");
   const Clip clip = read_bvh(path);
   std::vector<std::string> canonical;
   for (const std::string& name : clip.skeleton.names) canonical.push_back(canonical_joint_name(name));
-  const Clip out = augment(clip, kind, canonical, rng);
+  const Clip out = axes ? reorient_joint_axes(clip, kind_name == "axes" ? JointAxes::BonesAlongX : JointAxes::Random, rng)
+                        : augment(clip, kind, canonical, rng);
   write_bvh(cli.value("-o"), out.skeleton, out.motion);
   fmt::print("wrote {} ({} -> {} joints, {} frames)\n", cli.value("-o"), clip.skeleton.joint_count(),
              out.skeleton.joint_count(), out.motion.frame_count);

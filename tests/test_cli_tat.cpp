@@ -3,6 +3,7 @@
 // errors on bad input.
 #include "nec/motion/bvh.h"
 #include "nec/motion/files.h"
+#include "nec/motion/kinematics.h"
 #include "nec/motion/preprocess.h"
 #include "nec/motion/transfer_check.h"
 #include "nec/tat/tokens.h"
@@ -208,16 +209,83 @@ TEST_F(CliTat, EncodeDecodeOntoAnotherSkeletonKeepsItsNamesAndChannels) {
       std::abs(check_transfer(source_clip_normalized, preprocess(followed_free_feet, "followed").clip).heading_difference);
   const double free_error = std::abs(check_transfer(source_clip_normalized, preprocess(free, "free").clip).heading_difference);
   std::printf("heading change error: followed %.2f, as decoded %.2f deg\n", followed_error, free_error);
-  // The tiny model's decoded drift depends on its 6 training steps; steering takes out most of it (its
-  // precision on known drifts is tests/test_follow_heading.cpp's).
+  // The tiny model's decoded drift depends on its 6 training steps (33 deg in the files' own rest poses, 14 in
+  // the canonical rest); steering takes out most of it, to about 4 (its precision on known drifts is
+  // tests/test_follow_heading.cpp's).
   EXPECT_LT(followed_error, 5.0);
-  EXPECT_LT(followed_error, 0.25 * free_error);
+  EXPECT_LT(followed_error, 0.4 * free_error);
 
   // Feet are pinned by turning leg joints only: with --free-feet the root moves and turns the same.
   for (int t = 0; t < followed.motion.frame_count; ++t) {
     EXPECT_LT((followed.motion.translation(t, 0) - followed_free_feet.motion.translation(t, 0)).norm(), 1e-9) << t;
     EXPECT_LT(followed.motion.rotation(t, 0).angularDistance(followed_free_feet.motion.rotation(t, 0)), 1e-9) << t;
   }
+}
+
+// The same clips written in three joint-orient conventions (as authored, every bone along its parent's +X as
+// Maya exports, a random frame per joint): preprocessing takes them to one canonical rest, so the tokens, and
+// the transfers from them and onto them, are the same; output keeps the target file's own convention.
+TEST_F(CliTat, JointFrameConventionsChangeNeitherTokensNorTransfers) {
+  const std::string authored_source = zoo_clip("c000_biped");
+  const std::string authored_target = zoo_clip("c001_quadruped");
+  ASSERT_FALSE(authored_source.empty());
+  ASSERT_FALSE(authored_target.empty());
+  const auto convert = [&](const std::string& file, const std::string& kind, const std::string& name) {
+    const std::string out = path(name);
+    const CommandResult run = run_nec("augment " + file + " --kind " + kind + " --seed 4 -o " + out);
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    return out;
+  };
+  const std::vector<std::string> sources = {authored_source, convert(authored_source, "axes", "src_axes.bvh"),
+                                            convert(authored_source, "axes-random", "src_random.bvh")};
+  const std::string target_axes = convert(authored_target, "axes", "dst_axes.bvh");
+  // The conversion changed the local rotations and offsets, not the motion.
+  const Clip source_clip = read_bvh(authored_source);
+  const Clip source_axes = read_bvh(sources[1]);
+  EXPECT_GT((source_axes.skeleton.offsets[1] - source_clip.skeleton.offsets[1]).norm(), 1e-3);
+  const auto positions = [](const Clip& clip) { return forward_kinematics(clip.skeleton, clip.motion).positions; };
+  const auto largest_distance = [](const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+    EXPECT_EQ(a.size(), b.size());
+    double largest = 0.0;
+    for (size_t i = 0; i < std::min(a.size(), b.size()); ++i) largest = std::max(largest, (a[i] - b[i]).norm());
+    return largest;
+  };
+  const double source_diameter = source_clip.skeleton.diameter();
+  EXPECT_LT(largest_distance(positions(source_clip), positions(source_axes)), 1e-4 * source_diameter);
+
+  std::vector<std::vector<int32_t>> codes;
+  std::vector<std::vector<Vec3>> transferred;
+  for (size_t i = 0; i < sources.size(); ++i) {
+    const std::string tokens = path("convention" + std::to_string(i) + ".tokens.json");
+    const CommandResult encode = run_nec("encode " + sources[i] + " --model " + shared("tat") + " -o " + tokens +
+                                         " --threads 1");
+    ASSERT_EQ(encode.exit_code, 0) << encode.output;
+    codes.push_back(tat::read_tokens(tokens).codes);
+    const std::string out = path("convention" + std::to_string(i) + "_dog.bvh");
+    const CommandResult transfer = run_nec("transfer " + sources[i] + " --to " + authored_target + " --model " +
+                                           shared("tat") + " -o " + out + " --threads 1");
+    ASSERT_EQ(transfer.exit_code, 0) << transfer.output;
+    transferred.push_back(positions(read_bvh(out)));
+  }
+  const Clip target_clip = read_bvh(authored_target);
+  const double target_diameter = target_clip.skeleton.diameter();
+  for (size_t i = 1; i < sources.size(); ++i) {
+    EXPECT_EQ(codes[i], codes[0]) << sources[i];
+    EXPECT_LT(largest_distance(transferred[i], transferred[0]), 1e-3 * target_diameter) << sources[i];
+  }
+
+  // Onto the target in the +X convention: the same motion, written in that file's own offsets.
+  const std::string onto_axes = path("onto_axes.bvh");
+  const CommandResult transfer = run_nec("transfer " + authored_source + " --to " + target_axes + " --model " +
+                                         shared("tat") + " -o " + onto_axes + " --threads 1");
+  ASSERT_EQ(transfer.exit_code, 0) << transfer.output;
+  const Clip written = read_bvh(onto_axes);
+  const Clip target_in_axes = read_bvh(target_axes);
+  ASSERT_EQ(written.skeleton.joint_count(), target_in_axes.skeleton.joint_count());
+  for (int j = 1; j < written.skeleton.joint_count(); ++j) {
+    EXPECT_LT((written.skeleton.offsets[j] - target_in_axes.skeleton.offsets[j]).norm(), 1e-4 * target_diameter) << j;
+  }
+  EXPECT_LT(largest_distance(positions(written), transferred[0]), 1e-3 * target_diameter);
 }
 
 TEST_F(CliTat, LongClipsAreEncodedInWindows) {

@@ -438,14 +438,15 @@ TEST_F(OwoCheckpoint, SavingAgainReplacesAndLeavesNoTemporaries) {
 }
 
 TEST_F(OwoCheckpoint, NewerVersionNamesBothVersions) {
-  replace_in_config("\"version\": 2", "\"version\": 3");
-  expect_input_error(dir_, {"config.json", "format version 3", "reads version 2"});
+  replace_in_config("\"version\": 3", "\"version\": 4");
+  expect_input_error(dir_, {"config.json", "format version 4", "reads version 3"});
 }
 
-// Version 1 checkpoints have no LCA ancestry term (lca_ancestry.*): refused with a hint, not a missing tensor.
+// Version 2 checkpoints learnt skeletons in their files' rest poses (version 1 had no LCA ancestry term either):
+// refused with a hint, not read as if they fitted.
 TEST_F(OwoCheckpoint, OlderVersionIsRefusedWithAHint) {
-  replace_in_config("\"version\": 2", "\"version\": 1");
-  expect_input_error(dir_, {"config.json", "format version 1", "reads version 2", "retrain", "nec train owo"});
+  replace_in_config("\"version\": 3", "\"version\": 2");
+  expect_input_error(dir_, {"config.json", "format version 2", "reads version 3", "retrain", "nec train owo"});
 }
 
 TEST_F(OwoCheckpoint, ForeignFormatSaysHowToMakeOne) {

@@ -79,6 +79,7 @@ TEST(TransferCheck, AClipCheckedAgainstItselfMatches) {
   EXPECT_DOUBLE_EQ(check.heading_difference, 0.0);
   EXPECT_DOUBLE_EQ(check.direction_difference, 0.0);
   EXPECT_DOUBLE_EQ(check.joint_distance, 0.0);
+  EXPECT_DOUBLE_EQ(check.floor_difference, 0.0);
   // Joint distance needs one skeleton.
   EXPECT_TRUE(std::isnan(check_transfer(w.clip, walk(zoo::BodyPlan::Quadruped).clip).joint_distance));
 }
@@ -105,6 +106,23 @@ TEST(TransferCheck, AFrozenRootAndAStretchedBoneShow) {
   travelled /= w.clip.motion.frame_count * w.clip.skeleton.diameter();
   EXPECT_GT(travelled, 0.5);
   EXPECT_NEAR(check.joint_distance, travelled, 1e-3);
+}
+
+// A transfer that floats in one second of its clip: that window's lowest joint, not the others'.
+TEST(TransferCheck, ABodyAboveTheFloorShowsInItsWindow) {
+  const Walk w = walk(zoo::BodyPlan::Quadruped);
+  const double size = w.clip.skeleton.diameter();
+  const MotionMeasurements standing = measure_motion(w.clip);
+  const int window = static_cast<int>(std::lround(kFloorWindowSeconds * w.clip.motion.fps));
+  ASSERT_GE(w.clip.motion.frame_count, 2 * window);
+  ASSERT_EQ(standing.lowest_heights.size(), static_cast<size_t>((w.clip.motion.frame_count + window - 1) / window));
+  for (double height : standing.lowest_heights) EXPECT_NEAR(height, 0.0, kFloorTolerance);  // the zoo stands on y = 0
+  Clip floating = w.clip;
+  for (int t = window; t < 2 * window; ++t) floating.motion.translation(t, 0).y() += 0.2 * size;
+  const TransferCheck check = check_transfer(w.clip, floating);
+  EXPECT_NEAR(check.floor_difference, 0.2, 1e-9);
+  EXPECT_NEAR(check.output.lowest_heights[1] - standing.lowest_heights[1], 0.2, 1e-9);
+  EXPECT_DOUBLE_EQ(check.output.lowest_heights[0], standing.lowest_heights[0]);
 }
 
 // A body that outruns its legs: the planted feet slide, which foot skate shows and touchdowns lose.

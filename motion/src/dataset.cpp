@@ -7,6 +7,7 @@
 #include "nec/motion/files.h"
 #include "nec/motion/hash.h"
 #include "nec/motion/random.h"
+#include "nec/motion/rest_pose.h"
 
 #include <nlohmann/json.hpp>
 
@@ -243,7 +244,8 @@ Json options_to_json(const CacheOptions& options) {
                        {"max_bone_ratio", p.max_bone_ratio},
                        {"translation_tolerance", p.translation_tolerance},
                        {"up", up_axis_name(p.up)},
-                       {"min_frames", p.min_frames}};
+                       {"min_frames", p.min_frames},
+                       {"canonical_rest", p.canonical_rest}};
   out["split"] = {{"val_fraction", s.val_fraction},
                   {"test_fraction", s.test_fraction},
                   {"seed", s.seed},
@@ -260,6 +262,7 @@ CacheOptions options_from_json(const Json& j, const std::string& file) {
   options.preprocess.translation_tolerance = p.at("translation_tolerance").get<double>();
   options.preprocess.up = parse_up_axis(p.at("up").get<std::string>(), file);
   options.preprocess.min_frames = p.at("min_frames").get<int>();
+  options.preprocess.canonical_rest = p.at("canonical_rest").get<bool>();
   const Json& s = j.at("split");
   options.split.val_fraction = s.at("val_fraction").get<double>();
   options.split.test_fraction = s.at("test_fraction").get<double>();
@@ -269,7 +272,30 @@ CacheOptions options_from_json(const Json& j, const std::string& file) {
   return options;
 }
 
-Json clip_to_json(const CacheClip& c, size_t feature_offset) {
+// A clip's rest frames as stored: one flat list (w, x, y, z per joint) per distinct set, clips of one rig sharing one.
+std::string rest_frames_key(const std::vector<Quat>& frames) {
+  return std::string(reinterpret_cast<const char*>(frames.data()), frames.size() * sizeof(Quat));
+}
+
+Json rest_frames_to_json(const std::vector<Quat>& frames) {
+  Json out = Json::array();
+  for (const Quat& q : frames) {
+    for (double v : {q.w(), q.x(), q.y(), q.z()}) out.push_back(v);
+  }
+  return out;
+}
+
+std::vector<Quat> rest_frames_from_json(const Json& j, const std::string& file, size_t index) {
+  const auto values = j.get<std::vector<double>>();
+  if (values.size() % 4 != 0) {
+    throw InputError(file, 0, "rest_frames " + std::to_string(index) + " is not a list of quaternions" + kHint);
+  }
+  std::vector<Quat> frames;
+  for (size_t i = 0; i < values.size(); i += 4) frames.emplace_back(values[i], values[i + 1], values[i + 2], values[i + 3]);
+  return frames;
+}
+
+Json clip_to_json(const CacheClip& c, size_t feature_offset, int rest_frames) {
   const Normalization& n = c.normalization;
   Json out;
   out["id"] = c.id;
@@ -287,12 +313,14 @@ Json clip_to_json(const CacheClip& c, size_t feature_offset) {
   out["normalization"] = {{"scale", n.scale},
                           {"rotation", {n.rotation.w(), n.rotation.x(), n.rotation.y(), n.rotation.z()}},
                           {"origin", {n.origin.x(), n.origin.y(), n.origin.z()}},
-                          {"source_fps", n.source_fps}};
+                          {"source_fps", n.source_fps},
+                          {"rest_frames", rest_frames}};
   out["report"] = c.report;
   return out;
 }
 
-CacheClip clip_from_json(const Json& j, const std::string& file, int index) {
+CacheClip clip_from_json(const Json& j, const std::string& file, int index,
+                         const std::vector<std::vector<Quat>>& rest_frames) {
   CacheClip c;
   c.id = j.at("id").get<std::string>();
   c.source = j.at("source").get<std::string>();
@@ -315,6 +343,7 @@ CacheClip clip_from_json(const Json& j, const std::string& file, int index) {
   const auto rotation = n.at("rotation").get<std::vector<double>>();
   const auto origin = n.at("origin").get<std::vector<double>>();
   c.normalization.source_fps = n.at("source_fps").get<double>();
+  const int rest = n.at("rest_frames").get<int>();
   c.report = j.at("report").get<std::vector<std::string>>();
   if (start.size() != 2 || rotation.size() != 4 || origin.size() != 3) {
     throw InputError(file, 0, what + "start_xz needs 2 numbers, rotation 4 and origin 3" + kHint);
@@ -322,6 +351,17 @@ CacheClip clip_from_json(const Json& j, const std::string& file, int index) {
   c.start_xz = {start[0], start[1]};
   c.normalization.rotation = Quat(rotation[0], rotation[1], rotation[2], rotation[3]);
   c.normalization.origin = Vec3(origin[0], origin[1], origin[2]);
+  if (rest < -1 || rest >= static_cast<int>(rest_frames.size())) {
+    throw InputError(file, 0, what + "unknown rest_frames " + std::to_string(rest) + kHint);
+  }
+  if (rest >= 0) {
+    c.normalization.rest_frames = rest_frames[rest];
+    if (static_cast<int>(c.normalization.rest_frames.size()) != c.joint_count) {
+      throw InputError(file, 0, what + "rest_frames " + std::to_string(rest) + " has " +
+                                    std::to_string(c.normalization.rest_frames.size()) + " joints, the clip " +
+                                    std::to_string(c.joint_count) + kHint);
+    }
+  }
   if (c.frame_count < 1) throw InputError(file, 0, what + "has " + std::to_string(c.frame_count) + " frames" + kHint);
   return c;
 }
@@ -643,6 +683,58 @@ bool same_geometry(const Skeleton& a, const Skeleton& b) {
   return true;
 }
 
+// Clips of one rig (same topology, offsets within kSameOffsetTolerance in the file's own joint frames) share one
+// canonical rest, the mean pose over all their frames, where preprocess gave each clip its own: one stored skeleton
+// per rig, as in the file. Per entry: its rig's rest frames and how many clips the rig has (empty frames for
+// rejected entries, entries kept in their file's frames and inconsistent ones, which the caller rejects).
+struct RigRest {
+  std::vector<Quat> frames;
+  int clips = 0;
+};
+
+std::vector<RigRest> rig_rest_frames(const std::vector<CacheEntry>& entries) {
+  struct Rig {
+    Skeleton authored;
+    MeanPoseFrames mean;
+    int clips = 0;
+  };
+  std::vector<Rig> rigs;
+  std::unordered_map<std::string, std::vector<int>> rigs_by_topology;
+  std::vector<int> rig_of(entries.size(), -1);
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const PreparedClip& p = entries[i].prepared;
+    const int joints = p.clip.skeleton.joint_count();
+    if (!p.report.accepted() || static_cast<int>(p.normalization.rest_frames.size()) != joints ||
+        static_cast<int>(p.canonical_names.size()) != joints || p.clip.motion.joint_count != joints) {
+      continue;
+    }
+    Skeleton authored = reexpress_skeleton(p.clip.skeleton, inverse_frames(p.normalization.rest_frames));
+    std::vector<int>& same_topology = rigs_by_topology[topology_key(authored, p.canonical_names)];
+    int rig = -1;
+    for (int candidate : same_topology) {
+      if (same_geometry(rigs[candidate].authored, authored)) {
+        rig = candidate;
+        break;
+      }
+    }
+    if (rig < 0) {
+      rig = static_cast<int>(rigs.size());
+      same_topology.push_back(rig);
+      rigs.push_back({authored, MeanPoseFrames(authored), 0});
+    }
+    rigs[rig].mean.add(p.clip.motion, p.normalization.rest_frames);
+    ++rigs[rig].clips;
+    rig_of[i] = rig;
+  }
+  std::vector<std::vector<Quat>> frames;
+  for (const Rig& rig : rigs) frames.push_back(rig.mean.frames());
+  std::vector<RigRest> out(entries.size());
+  for (size_t i = 0; i < entries.size(); ++i) {
+    if (rig_of[i] >= 0) out[i] = {frames[rig_of[i]], rigs[rig_of[i]].clips};
+  }
+  return out;
+}
+
 }  // namespace
 
 DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOptions& options) {
@@ -670,6 +762,7 @@ DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOpti
   std::unordered_set<std::string> skeleton_names;
   std::unordered_map<std::string, int> unnamed_per_dataset;
   std::vector<float> feature_data;
+  const std::vector<RigRest> rig_rests = rig_rest_frames(entries);
 
   for (size_t index = 0; index < entries.size(); ++index) {
     const CacheEntry& e = entries[index];
@@ -679,8 +772,23 @@ DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOpti
       cache.rejected.push_back({e.source, e.dataset, p.report.rejection, p.report.changes});
       continue;
     }
-    const Skeleton& skeleton = p.clip.skeleton;
-    const Motion& motion = p.clip.motion;
+    Normalization normalization = p.normalization;
+    std::vector<std::string> report = p.report.changes;
+    Clip rig_clip;  // the clip in its rig's shared rest
+    const RigRest& rig_rest = rig_rests[index];
+    if (!rig_rest.frames.empty()) {
+      std::vector<Quat> change(rig_rest.frames.size());
+      for (size_t j = 0; j < change.size(); ++j) {
+        change[j] = (rig_rest.frames[j] * p.normalization.rest_frames[j].conjugate()).normalized();
+      }
+      rig_clip = reexpress_joint_frames(p.clip, change);
+      normalization.rest_frames = rig_rest.frames;
+      report.push_back("shares its rig's canonical rest pose (the mean pose of its " + std::to_string(rig_rest.clips) +
+                       " clip(s))");
+    }
+    const Clip& clip = rig_rest.frames.empty() ? p.clip : rig_clip;
+    const Skeleton& skeleton = clip.skeleton;
+    const Motion& motion = clip.motion;
     if (e.source.empty()) throw std::invalid_argument(what + "has no source file");
     skeleton.validate();
     if (motion.joint_count != skeleton.joint_count()) throw std::invalid_argument(what + "motion and skeleton joint counts differ");
@@ -741,9 +849,9 @@ DatasetCache build_cache(const std::vector<CacheEntry>& entries, const CacheOpti
     c.fps = cache.fps;
     c.source_frame = e.source_frame;
     c.captions = e.captions;
-    c.normalization = p.normalization;
+    c.normalization = std::move(normalization);
     c.start_xz = f.start_xz;
-    c.report = p.report.changes;
+    c.report = std::move(report);
     c.feature_offset = feature_data.size();
     feature_data.insert(feature_data.end(), f.data.begin(), f.data.end());
     cache.clips.push_back(std::move(c));
@@ -815,14 +923,24 @@ void save_cache(const DatasetCache& cache, const std::string& dir) {
                          {"skeletons", {{"name", kSkeletonsFile}, {"bytes", skeleton_file.bytes().size()}}}};
     manifest["skeletons"] = std::move(skeletons);
     Json clips = Json::array();
+    Json rest_frames = Json::array();
+    std::unordered_map<std::string, int> rest_frames_index;
     for (size_t i = 0; i < cache.clips.size(); ++i) {
       const CacheClip& c = cache.clips[i];
       if (c.skeleton < 0 || c.skeleton >= static_cast<int>(cache.skeletons.size()) ||
           c.joint_count != cache.skeletons[c.skeleton].skeleton.joint_count()) {
         throw std::invalid_argument("save_cache: clip '" + c.id + "' does not match its skeleton");
       }
-      clips.push_back(clip_to_json(c, feature_offsets[i]));
+      int rest = -1;
+      if (!c.normalization.rest_frames.empty()) {
+        const auto [it, added] =
+            rest_frames_index.emplace(rest_frames_key(c.normalization.rest_frames), static_cast<int>(rest_frames.size()));
+        if (added) rest_frames.push_back(rest_frames_to_json(c.normalization.rest_frames));
+        rest = it->second;
+      }
+      clips.push_back(clip_to_json(c, feature_offsets[i], rest));
     }
+    manifest["rest_frames"] = std::move(rest_frames);
     manifest["clips"] = std::move(clips);
     Json rejected = Json::array();
     for (const RejectedFile& r : cache.rejected) {
@@ -896,9 +1014,15 @@ DatasetCache read_cache(const std::string& dir) {
       skeleton_ranges.emplace_back(s.at("byte_offset").get<size_t>(), s.at("byte_size").get<size_t>());
       cache.skeletons.push_back(std::move(stored));
     }
+    std::vector<std::vector<Quat>> rest_frames;
+    for (const Json& r : manifest.at("rest_frames")) {
+      rest_frames.push_back(rest_frames_from_json(r, manifest_path, rest_frames.size()));
+    }
     const Json& clips = manifest.at("clips");
     cache.clips.reserve(clips.size());
-    for (const Json& c : clips) cache.clips.push_back(clip_from_json(c, manifest_path, static_cast<int>(cache.clips.size())));
+    for (const Json& c : clips) {
+      cache.clips.push_back(clip_from_json(c, manifest_path, static_cast<int>(cache.clips.size()), rest_frames));
+    }
     for (const Json& r : manifest.at("rejected")) {
       cache.rejected.push_back({r.at("source").get<std::string>(), r.at("dataset").get<std::string>(),
                                 r.at("reason").get<std::string>(), r.at("report").get<std::vector<std::string>>()});

@@ -7,6 +7,7 @@
 #include "nec/motion/features.h"
 #include "nec/motion/kinematics.h"
 #include "nec/motion/names.h"
+#include "nec/motion/rest_pose.h"
 
 #include <fmt/format.h>
 
@@ -264,13 +265,17 @@ void transform_clip(Clip& clip, const Quat& rotation, double scale, const Vec3& 
 }
 
 Clip denormalize(const Clip& normalized, const Normalization& normalization) {
-  Clip out = normalized;
+  // The rigid transform acts on the left of the root's rotation, the joint frames on the right: either order.
+  Clip out = normalization.rest_frames.empty()
+                 ? normalized
+                 : reexpress_joint_frames(normalized, inverse_frames(normalization.rest_frames));
   transform_clip(out, normalization.rotation, normalization.scale, normalization.origin);
   return out;
 }
 
 Clip renormalize(const Clip& normalized, const Normalization& from, const Normalization& to) {
-  Clip out = denormalize(normalized, from);
+  Clip out = normalized;
+  transform_clip(out, from.rotation, from.scale, from.origin);
   const Quat back = to.rotation.conjugate();
   transform_clip(out, back, 1.0 / to.scale, -(back * to.origin) / to.scale);
   return out;
@@ -361,7 +366,15 @@ PreparedClip preprocess(const Clip& raw, const std::string& file, const Preproce
     clip.motion.fps = options.target_fps;
     if (clip.motion.frame_count < options.min_frames) {
       report.rejection = fmt::format("only {} frame(s) after resampling", clip.motion.frame_count);
+      return out;
     }
+  }
+
+  // 8. Canonical rest: the clip's mean pose, world-aligned joint frames (every position unchanged).
+  if (options.canonical_rest) {
+    out.normalization.rest_frames = mean_pose_frames(clip);
+    clip = reexpress_joint_frames(clip, out.normalization.rest_frames);
+    report.changes.push_back("re-expressed in the canonical rest pose (the clip's mean pose, joint frames aligned with the world there)");
   }
   return out;
 }

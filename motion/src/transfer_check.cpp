@@ -61,6 +61,32 @@ GaitMeasurements measure_gait(const Clip& clip, double size) {
   return gait;
 }
 
+std::vector<double> lowest_heights(const Clip& clip, double size) {
+  const Motion& m = clip.motion;
+  std::vector<Vec3> positions;
+  joint_positions(clip.skeleton, m, positions);
+  const int window = std::max(1, static_cast<int>(std::lround(kFloorWindowSeconds * m.fps)));
+  std::vector<double> out;
+  for (int start = 0; start < m.frame_count; start += window) {
+    double lowest = std::numeric_limits<double>::infinity();
+    for (int t = start; t < std::min(start + window, m.frame_count); ++t) {
+      for (int j = 0; j < m.joint_count; ++j) lowest = std::min(lowest, positions[static_cast<size_t>(t) * m.joint_count + j].y());
+    }
+    out.push_back(lowest / size);
+  }
+  return out;
+}
+
+double floor_difference(const MotionMeasurements& source, const MotionMeasurements& output) {
+  const size_t windows = std::min(source.lowest_heights.size(), output.lowest_heights.size());
+  if (windows == 0) return kNaN;
+  double largest = 0.0;
+  for (size_t w = 0; w < windows; ++w) {
+    largest = std::max(largest, std::abs(output.lowest_heights[w] - source.lowest_heights[w]));
+  }
+  return largest;
+}
+
 // TransferCheck::joint_distance.
 double joint_distance(const Clip& source, const Clip& output) {
   if (source.skeleton.names != output.skeleton.names ||
@@ -103,6 +129,7 @@ MotionMeasurements measure_motion(const Clip& clip) {
                                                                         kDegreesPerRadian * std::atan2(facing_x, facing_z));
 
   out.gait = measure_gait(clip, size);
+  out.lowest_heights = lowest_heights(clip, size);
 
   const std::vector<double> rest = clip.skeleton.bone_lengths();
   for (int t = 0; t < m.frame_count; ++t) {
@@ -123,6 +150,7 @@ TransferCheck check_transfer(const Clip& source, const Clip& output) {
                                    ? kNaN
                                    : wrapped_difference(check.output.travel_direction, check.source.travel_direction);
   check.joint_distance = joint_distance(source, output);
+  check.floor_difference = floor_difference(check.source, check.output);
   return check;
 }
 

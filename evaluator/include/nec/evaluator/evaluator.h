@@ -39,7 +39,7 @@ class ConfigVisitor;
 namespace nec::evaluator {
 
 constexpr const char* kEvaluatorCheckpointFormat = "nec-evaluator";
-constexpr int kEvaluatorCheckpointVersion = 1;
+constexpr int kEvaluatorCheckpointVersion = 2;  // 2: clips in the canonical rest pose (motion/rest_pose.h)
 constexpr const char* kBestCheckpointDir = "best";  // inside a training checkpoint
 
 // Hyper-parameters of the two encoders; saved with a model.

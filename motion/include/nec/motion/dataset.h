@@ -14,7 +14,9 @@
 // rejected files), features.f32 (every clip's Θ, float32 little-endian,
 // concatenated) and skeletons.bin (each distinct skeleton once: clips whose
 // skeletons have the same topology and offsets within 1e-4 diameters share the
-// first one's record). Splits are assigned per source file, so the clips cut from one
+// first one's record). Clips of one rig share one canonical rest pose, the
+// mean pose over all of them (motion/rest_pose.h), so a rig is stored once, as
+// in its file. Splits are assigned per source file, so the clips cut from one
 // long take never straddle train and test.
 #pragma once
 
@@ -33,7 +35,7 @@
 namespace nec {
 
 constexpr const char* kDatasetFormatName = "nec-dataset";
-constexpr int kDatasetFormatVersion = 1;
+constexpr int kDatasetFormatVersion = 2;  // 2: the canonical rest pose (rest_frames); docs/dataset-format.md
 
 enum class Split { Train, Val, Test };
 

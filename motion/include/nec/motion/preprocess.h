@@ -7,8 +7,10 @@
 // Steps: merge dummy roots outside the body; fold constant non-root position
 // channels into offsets (reject varying ones); reject abnormal bone lengths;
 // compute canonical names; scale by the diameter; rotate so +Y is up and frame
-// 0 faces +Z with the root above the origin; resample to the corpus fps.
-// Every change and the reason of a rejection is recorded in the report.
+// 0 faces +Z with the root above the origin; resample to the corpus fps;
+// re-express the joints in the canonical rest (motion/rest_pose.h: the mean
+// pose, world-aligned joint frames), so that no model sees how the rig was
+// authored. Every change and the reason of a rejection is recorded in the report.
 #pragma once
 
 #include "nec/motion/features.h"
@@ -27,6 +29,7 @@ struct PreprocessOptions {
   double translation_tolerance = 1e-3;  // non-root position channels varying more than this (× diameter) reject the clip
   UpAxis up = UpAxis::Auto;             // the file's up axis; Auto detects Z-up files
   int min_frames = 2;                   // clips shorter than this (after resampling) are rejected
+  bool canonical_rest = true;           // re-express in the canonical rest; false keeps the file's rest pose and joint frames
 };
 
 // What preprocessing did to a clip, for the per-file report.
@@ -38,12 +41,14 @@ struct PreprocessReport {
   bool accepted() const { return rejection.empty(); }
 };
 
-// How to undo the normalization: original = translate(rotate(scale * normalized)).
+// How to undo the normalization: original = translate(rotate(scale * normalized)), in the file's own joint
+// frames (reexpress_joint_frames with inverse_frames(rest_frames)).
 struct Normalization {
   double scale = 1.0;               // original units per normalized unit (the diameter)
   Quat rotation = Quat::Identity(); // normalized frame -> original frame (up axis and heading)
   Vec3 origin = Vec3::Zero();       // original position of the normalized origin
   double source_fps = 30.0;         // frame rate of the file
+  std::vector<Quat> rest_frames;    // (J) the file's joint frames -> canonical ones; empty: the file's frames kept
 };
 
 struct PreparedClip {
@@ -73,10 +78,12 @@ Motion resample(const Motion& motion, double fps);
 
 // Applies a rigid transform and scale to a whole clip: x -> rotation * (scale * x) + origin.
 void transform_clip(Clip& clip, const Quat& rotation, double scale, const Vec3& origin);
-// Undoes preprocess's scale, axes and heading (not the resampling).
+// Undoes preprocess's scale, axes, heading and canonical rest (not the resampling): the file's units,
+// offsets and joint frames.
 Clip denormalize(const Clip& normalized, const Normalization& normalization);
 // A clip normalized by `from`, put into the normalized frame of another clip of the same file frame (`to`):
-// compares two files in one frame, e.g. a transfer onto its source's own skeleton with that source.
+// compares two files in one frame, e.g. a transfer onto its source's own skeleton with that source. Scale,
+// axes and heading only: the joint frames stay `from`'s canonical ones (world positions do not depend on them).
 Clip renormalize(const Clip& normalized, const Normalization& from, const Normalization& to);
 
 // The decoder's side of step 6. Tokens hold no start heading (tat/model_space.h): this turns a decoded

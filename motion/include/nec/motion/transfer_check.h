@@ -14,6 +14,8 @@
 
 #include "nec/motion/motion.h"
 
+#include <vector>
+
 namespace nec {
 
 struct GaitMeasurements {
@@ -34,6 +36,9 @@ struct MotionMeasurements {
   // the left, 180 backward; NaN if the displacement is under kMinTravel.
   double travel_direction = 0.0;
   GaitMeasurements gait;
+  // The lowest joint's height above the file's ground (y = 0) in each kFloorWindowSeconds window (the last
+  // one may be shorter), body sizes: where the body stands, window by window.
+  std::vector<double> lowest_heights;
   double bone_length_change = 0.0;  // largest |bone length - rest length| over frames and bones, body sizes
 };
 
@@ -45,6 +50,12 @@ inline constexpr double kMinTravel = 0.1;
 // sizes per second; a plant must last two frames to count.
 inline constexpr double kContactHeight = 0.04;
 inline constexpr double kContactSpeed = 0.3;
+
+// Window length of MotionMeasurements::lowest_heights, and how far (body sizes) a transfer's lowest joint may
+// sit from where its source's does, window by window, to stand on the floor as the source does (about 5 cm
+// on a person).
+inline constexpr double kFloorWindowSeconds = 1.0;
+inline constexpr double kFloorTolerance = 0.03;
 
 // Throws std::invalid_argument for a clip without frames or with fps <= 0.
 MotionMeasurements measure_motion(const Clip& clip);
@@ -58,6 +69,9 @@ struct TransferCheck {
   // sizes: only when both have the same skeleton (joint names in the same order) and frame count, as a
   // transfer onto the source's own skeleton does; NaN otherwise.
   double joint_distance = 0.0;
+  // The largest |output - source| lowest height over the windows both clips have, body sizes (each its own):
+  // a transfer that floats above, or sinks into, the floor its source stands on; NaN if either has none.
+  double floor_difference = 0.0;
 };
 
 TransferCheck check_transfer(const Clip& source, const Clip& output);

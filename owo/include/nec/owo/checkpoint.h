@@ -1,6 +1,6 @@
 // OwO checkpoints: a pretrained OwoPretrainer (encoder + heads) as a directory
 //
-//   <dir>/config.json   {"format": "nec-owo", "version": 2, "architecture": "OwoPretrainer",
+//   <dir>/config.json   {"format": "nec-owo", "version": 3, "architecture": "OwoPretrainer",
 //                        "encoder": OwoConfig, "pretrain": PretrainConfig,
 //                        "training_step": 1200, "data": "zoo: 512 creatures, seed 3",
 //                        "tensors": "tensors.pt"}
@@ -25,8 +25,9 @@
 namespace nec::owo {
 
 constexpr const char* kOwoCheckpointFormat = "nec-owo";  // config.json "format"
-// config.json "version" this nec reads and writes; 2: the LCA pointer's ancestry term (lca_ancestry.*).
-constexpr int kOwoCheckpointVersion = 2;
+// config.json "version" this nec reads and writes; 2: the LCA pointer's ancestry term (lca_ancestry.*);
+// 3: trained on skeletons in the canonical rest pose (motion/rest_pose.h).
+constexpr int kOwoCheckpointVersion = 3;
 
 // What a checkpoint records besides the architecture.
 struct OwoCheckpointInfo {

@@ -1,7 +1,7 @@
 // TAT checkpoints: a trained tokenizer together with the frozen OwO encoder it
 // was trained with, so one directory is all `nec encode|decode|transfer` need.
 //
-//   <dir>/config.json   {"format": "nec-tat", "version": 9, "architecture": "Tokenizer",
+//   <dir>/config.json   {"format": "nec-tat", "version": 10, "architecture": "Tokenizer",
 //                        "tokenizer": TatConfig, "window_frames": 64, "fps": 30,
 //                        "training_step": 4000, "data": "cache/ (1,036 clips)",
 //                        "tensors": "tensors.pt", "owo": "owo"}
@@ -29,7 +29,7 @@
 namespace nec::tat {
 
 constexpr const char* kTatCheckpointFormat = "nec-tat";
-constexpr int kTatCheckpointVersion = 9;  // version 9: root height per frame in the model space; history in docs/checkpoint-format.md
+constexpr int kTatCheckpointVersion = 10;  // version 10: the canonical rest pose (motion/rest_pose.h); history in docs/checkpoint-format.md
 
 struct TatCheckpointInfo {
   int64_t window_frames = 64;   // training window T, e.g. 64; inference uses windows of this size
