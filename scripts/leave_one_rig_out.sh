@@ -7,6 +7,7 @@
 # comma-separated, of dog (MANN), bandai and cmu (Debian's CMU files). Needs ../shared/data.
 # Writes OUT_DIR/{cache,owo,tat}, OUT_DIR/recon.md (every dataset's test clips) and OUT_DIR/recon_axes.md
 # (the held-out rigs' first 12 files, converted).
+# NEC=path/to/nec runs another build of the binary.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 3 ]; then
@@ -14,7 +15,7 @@ if [ $# -lt 3 ]; then
   exit 2
 fi
 zoo=$1 out=$2 held=$3 threads=${4:-1}
-nec=build/apps/nec
+nec=${NEC:-build/apps/nec}  # NEC=path: another build of the binary
 declare -A source_dir=([bandai]=../shared/data/bandai [dog]=../shared/data/mann_dog [cmu]=/usr/share/assimp/models/BVH)
 declare -A noun=([bandai]=person [dog]=dog [cmu]=person)
 IFS=',' read -r -a held_datasets <<< "$held"
