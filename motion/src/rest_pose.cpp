@@ -1,6 +1,8 @@
 // Joint-frame conventions: re-expressing a rig, the mean-pose canonical rest, other authoring conventions.
 #include "nec/motion/rest_pose.h"
 
+#include "nec/motion/kinematics.h"
+
 #include <Eigen/SVD>
 
 #include <cmath>
@@ -80,17 +82,13 @@ void MeanPoseFrames::add(const Motion& motion, const std::vector<Quat>& frames) 
   }
   if (!frames.empty()) check_frame_count(skeleton_, frames, "MeanPoseFrames::add");
   if (motion.frame_count == 0) return;
-  std::vector<Quat> global(joints);
-  Quat start_inverse = Quat::Identity();
+  const Pose pose = forward_kinematics(skeleton_, motion);
+  const Quat start_inverse = pose.rotation(0, 0).conjugate();
   for (int t = 0; t < motion.frame_count; ++t) {
-    for (int j = 0; j < joints; ++j) {
-      global[j] = j == 0 ? motion.rotation(t, 0) : global[skeleton_.parents[j]] * motion.rotation(t, j);
-    }
-    if (t == 0) start_inverse = global[0].conjugate();
     // The root's turn since frame 0 is the same in every convention (G -> G D cancels in G_t G_0^-1).
-    const Quat unturn = heading_rotation((global[0] * start_inverse).normalized()).conjugate();
+    const Quat unturn = heading_rotation((pose.rotation(t, 0) * start_inverse).normalized()).conjugate();
     for (int j = 0; j < joints; ++j) {
-      const Quat authored = frames.empty() ? global[j] : global[j] * frames[j];
+      const Quat authored = frames.empty() ? pose.rotation(t, j) : pose.rotation(t, j) * frames[j];
       sums_[j] += (unturn * authored).normalized().toRotationMatrix();
     }
   }
