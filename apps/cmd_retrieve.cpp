@@ -1,6 +1,7 @@
 // nec retrieve: motions of a cache for a caption, or captions for a motion, through the evaluator's index.
 #include "command_line.h"
 #include "commands.h"
+#include "model_options.h"
 
 #include "nec/evaluator/retrieval.h"
 #include "nec/evaluator/retrieval_index.h"
@@ -26,7 +27,8 @@ int run_retrieve(int argc, char** argv) {
   cli.positional("CAPTION", "what to look for, e.g. \"a dog trots to the left\"", false);
   cli.option("--motion", "CLIP.bvh", "", "list the captions nearest to this clip instead");
   cli.option("--db", "CACHE", "", "dataset cache to search (from `nec prepare`)", true);
-  cli.option("--evaluator", "EVAL", "", "evaluator checkpoint (from `nec train evaluator`, e.g. runs/eval/best)", true);
+  cli.option("--evaluator", "EVAL", "", "evaluator checkpoint (from `nec train evaluator`, e.g. runs/eval/best);\n"
+                                        "default: models/default/evaluator");
   cli.option("-k", "K", "5", "how many results");
   cli.option("--plan", "PLAN", "", "only clips of this body plan or dataset, e.g. quadruped, dog, bandai");
   cli.option("--view", "PAGE.html", "", "also write a page that plays the matched clips side by side");
@@ -45,8 +47,9 @@ int run_retrieve(int argc, char** argv) {
 
   const auto start = std::chrono::steady_clock::now();
   const DatasetCache cache = read_cache(cli.value("--db"));
-  evaluator::EvaluatorSession session = evaluator::open_evaluator(cli.value("--evaluator"), cli.value("--glove"));
-  const evaluator::OpenedIndex opened = evaluator::open_retrieval_index(session, cache, cli.value("--evaluator"));
+  const std::string evaluator_dir = model_or_default(cli.value("--evaluator"), "evaluator", "--evaluator");
+  evaluator::EvaluatorSession session = evaluator::open_evaluator(evaluator_dir, cli.value("--glove"));
+  const evaluator::OpenedIndex opened = evaluator::open_retrieval_index(session, cache, evaluator_dir);
   if (opened.built) {
     fmt::print("indexed {} clips and {} captions{}{}\n", opened.index.clips.size(), opened.index.captions.size(),
                opened.stored ? " into " + opened.path : "", opened.note.empty() ? "" : " (" + opened.note + ")");

@@ -15,9 +15,20 @@
 namespace nec::app {
 namespace {
 
-void declare_feet_option(CommandLine& cli) {
+void declare_correction_options(CommandLine& cli) {
+  cli.flag("--free-height", "keep the height as decoded (default: lift or lower the body to stand on the floor where\n"
+                            "the source stands; without a source, onto the floor where it stands near it)");
   cli.flag("--free-feet", "leave the feet as decoded (default: pin the feet the motion puts down and bend their legs\n"
                           "to reach the pins, as decoded feet slide)");
+}
+
+tat::DecodeCorrections corrections(const CommandLine& cli, const Clip* source) {
+  tat::DecodeCorrections out;
+  out.source = source;
+  out.heading = source != nullptr && !cli.is_set("--free-heading");  // only transfer declares --free-heading
+  out.ground = !cli.is_set("--free-height");
+  out.feet = !cli.is_set("--free-feet");
+  return out;
 }
 
 std::string decode_summary(const tat::DecodeReport& report) {
@@ -26,6 +37,11 @@ std::string decode_summary(const tat::DecodeReport& report) {
     out += fmt::format("; steered to face and go as the source does (body turned {:.1f}° on average, {:.1f}° at "
                        "most; path {:.1f}° at most)",
                        report.heading->mean_turn, report.heading->max_turn, report.heading->max_path_turn);
+  }
+  if (report.ground && report.ground->max_shift > 0.0) {
+    out += fmt::format("; {} onto the floor ({:.3f} body sizes on average, {:.3f} at most)",
+                       report.ground->mean_shift > 0.0 ? "moved" : "kept", report.ground->mean_shift,
+                       report.ground->max_shift);
   }
   const FootLockReport& feet = report.feet;
   if (feet.feet > 0) {
@@ -71,15 +87,15 @@ int run_decode(int argc, char** argv) {
              true);
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--up", "AXIS", "auto", "up axis of the skeleton file: auto, y or z");
-  declare_feet_option(cli);
+  declare_correction_options(cli);
   declare_model_options(cli);
   cli.example("nec decode walk.tokens.json --skeleton dragon.bvh --model runs/tat -o dragon_walk.bvh");
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
   tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const tat::TokenFile tokens = tat::read_tokens(cli.positional_value("TOKENS.json"));
-  const tat::DecodeReport report = tat::decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"), nullptr,
-                                          cli.is_set("--free-feet"), cli.value("-o"));
+  const tat::DecodeReport report = tat::decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"),
+                                                    corrections(cli, nullptr), cli.value("-o"));
   fmt::print("wrote {}: {} frames on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
              cli.value("--skeleton"), decode_summary(report), seconds_since(start));
   return 0;
@@ -97,7 +113,7 @@ int run_transfer(int argc, char** argv) {
   cli.option("--tokens", "FILE", "", "also write the intermediate tokens here");
   cli.flag("--free-heading", "keep heading and path as decoded (default: turn the output's body and path slowly\n"
                              "to face and go where the source does over time, as the decoded turning drifts)");
-  declare_feet_option(cli);
+  declare_correction_options(cli);
   declare_model_options(cli);
   cli.example("nec transfer human_wave.bvh --to dragon.bvh --model runs/tat -o dragon_wave.bvh");
   if (!cli.parse(argc, argv)) return 0;
@@ -107,8 +123,8 @@ int run_transfer(int argc, char** argv) {
   const PreparedClip source = tat::prepare_for_model(path, session.model.info.fps, cli.up_axis("--up"));
   const tat::TokenFile tokens = tat::encode_file(session, source, path);
   const tat::DecodeReport report =
-      tat::decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"),
-                       cli.is_set("--free-heading") ? nullptr : &source.clip, cli.is_set("--free-feet"), cli.value("-o"));
+      tat::decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"), corrections(cli, &source.clip),
+                       cli.value("-o"));
   if (!cli.value("--tokens").empty()) tat::write_tokens(cli.value("--tokens"), tokens);
   fmt::print("wrote {}: {} frames of {} on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames, path,
              cli.value("--to"), decode_summary(report), seconds_since(start));

@@ -30,11 +30,12 @@ constexpr Subcommand kSubcommands[] = {
     {"text", nec::app::run_text, "word vectors: import GloVe once, joint-name similarity, nearest words"},
     {"view", nec::app::run_view, "show BVH clips in a self-contained HTML player, or a PNG strip of frames"},
     {"retrieve", nec::app::run_retrieve, "find motions of a cache by text, or captions for a motion (trained evaluator)"},
-    {"train", nec::app::run_train, "train a model: owo (skeleton encoder), tat (tokenizer) or evaluator (text-motion)"},
+    {"train", nec::app::run_train, "train a model: owo (skeleton encoder), tat (tokenizer), evaluator (text-motion) or gpt (text to tokens)"},
     {"eval", nec::app::run_eval, "evaluate a trained model: owo (skeleton encoder on unseen skeletons)"},
     {"encode", nec::app::run_encode, "turn a BVH clip into motion tokens with a trained tokenizer"},
     {"decode", nec::app::run_decode, "decode motion tokens onto any skeleton, as BVH"},
     {"transfer", nec::app::run_transfer, "move a clip onto another skeleton (encode + decode)"},
+    {"generate", nec::app::run_generate, "motion from text for any skeleton (trained GPT + tokenizer), as BVH"},
 };
 
 void print_overview() {

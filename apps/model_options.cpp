@@ -3,12 +3,30 @@
 
 #include "torch_runtime.h"
 
+#include <filesystem>
 #include <stdexcept>
 
 namespace nec::app {
 
+std::string default_model_dir(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::path(NEC_REPOSITORY_DIR) / "models" / "default" / name;
+  return std::filesystem::exists(dir / "config.json") ? dir.string() : "";
+}
+
+std::string model_or_default(const std::string& given, const std::string& name, const std::string& option) {
+  if (!given.empty()) return given;
+  const std::string found = default_model_dir(name);
+  if (found.empty()) {
+    throw UsageError(option + " is needed: there are no default models in models/default (scripts/train_default_models.sh makes them)");
+  }
+  return found;
+}
+
 void declare_model_options(CommandLine& cli, bool with_model) {
-  if (with_model) cli.option("--model", "CKPT", "", "tokenizer checkpoint directory (from `nec train tat`)", true);
+  if (with_model) {
+    cli.option("--model", "CKPT", "", "tokenizer checkpoint directory (from `nec train tat`); default: the\n"
+                                             "default models' (models/default/gpt/tat)");
+  }
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
   cli.option("--threads", "N", "0", "torch threads; 0 = all cores");
   cli.option("--window-overlap", "FRAMES", "auto",
@@ -17,7 +35,9 @@ void declare_model_options(CommandLine& cli, bool with_model) {
 
 TokenizerOptions tokenizer_options(const CommandLine& cli) {
   TokenizerOptions options;
-  if (cli.declared("--model")) options.model = cli.value("--model");
+  if (cli.declared("--model")) {
+    options.model = model_or_default(cli.value("--model"), "gpt/tat", "--model");
+  }
   options.glove = cli.value("--glove");
   options.threads = threads_option(cli);
   if (cli.value("--window-overlap") != "auto") {

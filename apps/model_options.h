@@ -11,7 +11,14 @@
 
 namespace nec::app {
 
-// Declares --model (unless with_model is false), --glove, --threads, --window-overlap.
+// The default models of the repository (models/default/, made by scripts/train_default_models.sh):
+// the directory of `name` ("gpt", "gpt/tat", "evaluator"), or "" when it is not there.
+std::string default_model_dir(const std::string& name);
+// `given` when not empty, else the default model `name`; UsageError naming `option` when there is none.
+std::string model_or_default(const std::string& given, const std::string& name, const std::string& option);
+
+// Declares --model (unless with_model is false; default: the default models' tokenizer), --glove, --threads,
+// --window-overlap.
 void declare_model_options(CommandLine& cli, bool with_model = true);
 
 struct TokenizerOptions {

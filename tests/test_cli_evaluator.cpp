@@ -27,16 +27,8 @@ class CliEvaluator : public testing::SharedFolderTest {
   static void SetUpTestSuite() {
     SharedFolderTest::SetUpTestSuite();
     const testing::TempDir& d = shared_folder();
-    ASSERT_EQ(run_nec("zoo --out " + d / "zoo" + " --creatures 9 --clips-per-creature 12 --seconds 2 --seed 4 "
-                      "--hold-out spider --quiet").exit_code, 0);
-    ASSERT_EQ(run_nec("prepare zoo=" + d / "zoo/seen" + " zoo_held_out=" + d / "zoo/held_out" +
-                      " --hold-out-dataset zoo_held_out -o " + d / "cache" + " --quiet").exit_code, 0);
-    ASSERT_EQ(run_nec("text train-tokenizer --data " + d / "cache" + " -o " + d / "spm.model" + " --vocab-size 150").exit_code, 0);
-    write_file_atomic(d / "owo.json", R"({"encoder": {"name_dim": 0, "dim": 16, "layers": 1, "heads": 2, "edge_dim": 8},
-      "names": false, "batch_size": 4, "steps": 2, "log_every": 1, "validate_every": 0, "checkpoint_every": 0})");
-    const CommandResult owo = run_nec("train owo --config " + d / "owo.json" + " --data " + d / "cache" + " --out " +
-                                      d / "owo" + " --threads 1");
-    ASSERT_EQ(owo.exit_code, 0) << owo.output;
+    testing::make_captioned_zoo(d, 12, 4);
+    if (HasFatalFailure()) return;
     write_file_atomic(d / "eval.json", R"({
       "model": {"motion": {"dim": 16, "heads": 2, "feedforward": 32, "temporal_layers": 1, "max_steps": 16, "output_dim": 16},
                 "text": {"word_dim": 0, "dim": 16, "heads": 2, "feedforward": 32, "layers": 1, "max_pieces": 128, "output_dim": 16}},

@@ -67,9 +67,9 @@ TEST_F(CliTrain, DispatchByModel) {
   const CommandResult overview = run_nec("train");
   EXPECT_EQ(overview.exit_code, 2);
   EXPECT_TRUE(contains(overview.output, "owo")) << overview.output;
-  const CommandResult unknown = run_nec("train gpt");
+  const CommandResult unknown = run_nec("train unicorn");
   EXPECT_EQ(unknown.exit_code, 2);
-  EXPECT_TRUE(contains(unknown.output, "unknown model 'gpt' (known: owo")) << unknown.output;
+  EXPECT_TRUE(contains(unknown.output, "unknown model 'unicorn' (known: owo")) << unknown.output;
   const CommandResult help = run_nec("train owo --help");
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_TRUE(contains(help.output, "--threads N") && contains(help.output, "(default: cpu)")) << help.output;

@@ -125,11 +125,7 @@ LoadedEvaluator load_evaluator_checkpoint(const std::string& dir) {
   }
   train::load_module_tensors(*loaded.model, (fs::path(dir) / tensor_file).string(), kTrainHint);
   loaded.piece_model_path = (fs::path(dir) / piece_file).string();
-  loaded.pieces.emplace(text::PieceModel::load(loaded.piece_model_path));
-  if (loaded.pieces->vocab_size() != model_config.text.vocab_size) {
-    fields.fail("the piece model has " + std::to_string(loaded.pieces->vocab_size()) + " pieces, the text encoder " +
-                std::to_string(model_config.text.vocab_size) + "; " + fields.hint());
-  }
+  loaded.pieces.emplace(text::load_checkpoint_pieces(loaded.piece_model_path, model_config.text, fields));
   loaded.owo = owo::load_owo_checkpoint((fs::path(dir) / owo_dir).string()).model;
   if (loaded.owo->encoder->config().dim != model_config.motion.joint_embedding_dim) {
     fields.fail("motion.joint_embedding_dim is " + std::to_string(model_config.motion.joint_embedding_dim) +

@@ -1,9 +1,11 @@
 // The retrieval index: build, store, load, and nearest neighbours.
 #include "nec/evaluator/retrieval_index.h"
 
+#include "nec/motion/byte_io.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/motion/hash.h"
+#include "nec/train/checkpoint_io.h"
 
 #include <torch/torch.h>
 
@@ -18,47 +20,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr char kMagic[8] = {'N', 'E', 'C', 'R', 'I', 'D', 'X', '\0'};
-
-template <typename T>
-void put(std::string& out, const T& value) {
-  out.append(reinterpret_cast<const char*>(&value), sizeof value);
-}
-
-// Reads little-endian values from a byte string, failing with the file's name.
-class Reader {
- public:
-  Reader(const std::string& bytes, const std::string& path) : bytes_(bytes), path_(path) {}
-  template <typename T>
-  T get() {
-    T value;
-    need(sizeof value);
-    std::memcpy(&value, bytes_.data() + at_, sizeof value);
-    at_ += sizeof value;
-    return value;
-  }
-  std::vector<float> floats(size_t count) {
-    need(count * sizeof(float));
-    std::vector<float> out(count);
-    std::memcpy(out.data(), bytes_.data() + at_, count * sizeof(float));
-    at_ += count * sizeof(float);
-    return out;
-  }
-  std::string text(size_t count) {
-    need(count);
-    std::string out = bytes_.substr(at_, count);
-    at_ += count;
-    return out;
-  }
-  bool done() const { return at_ == bytes_.size(); }
-
- private:
-  void need(size_t count) const {
-    if (bytes_.size() - at_ < count) throw InputError(path_, 0, "the retrieval index is truncated; it will be rebuilt");
-  }
-  const std::string& bytes_;
-  const std::string& path_;
-  size_t at_ = 0;
-};
 
 std::vector<float> tensor_values(const at::Tensor& embeddings) {
   const at::Tensor values = embeddings.detach().to(torch::kCPU, torch::kFloat32).contiguous();
@@ -103,23 +64,6 @@ std::vector<Match> RetrievalIndex::nearest_captions(const at::Tensor& query, int
   return best_rows(query, caption_embeddings, dim, k, {});
 }
 
-uint64_t cache_key(const DatasetCache& cache) {
-  uint64_t key = kFnv1aOffset;
-  if (!cache.directory.empty()) {
-    key = fnv1a64(read_file((fs::path(cache.directory) / "manifest.json").string(), size_t{1} << 30));
-  }
-  const uint64_t clips = static_cast<uint64_t>(cache.clip_count());
-  return fnv1a64(std::string_view(reinterpret_cast<const char*>(&clips), sizeof clips), key);
-}
-
-uint64_t evaluator_key(const std::string& evaluator_dir) {
-  uint64_t key = kFnv1aOffset;
-  for (const char* file : {"config.json", "tensors.pt"}) {
-    key = fnv1a64(read_file((fs::path(evaluator_dir) / file).string(), size_t{1} << 32), key);
-  }
-  return key;
-}
-
 std::string retrieval_index_path(const DatasetCache& cache, uint64_t evaluator_key) {
   char name[64];
   std::snprintf(name, sizeof name, "retrieval-%016llx.index", static_cast<unsigned long long>(evaluator_key));
@@ -145,20 +89,19 @@ RetrievalIndex build_retrieval_index(EvaluatorSession& session, const DatasetCac
 
 std::string serialize(const RetrievalIndex& index) {
   std::string out(kMagic, sizeof kMagic);
-  put(out, kRetrievalIndexVersion);
-  put(out, static_cast<uint32_t>(index.dim));
-  put(out, index.cache_key);
-  put(out, index.evaluator_key);
-  put(out, static_cast<uint64_t>(index.clips.size()));
-  put(out, static_cast<uint64_t>(index.captions.size()));
-  for (const int clip : index.clips) put(out, static_cast<uint32_t>(clip));
-  out.append(reinterpret_cast<const char*>(index.clip_embeddings.data()), index.clip_embeddings.size() * sizeof(float));
+  append_value(out, kRetrievalIndexVersion);
+  append_value(out, static_cast<uint32_t>(index.dim));
+  append_value(out, index.cache_key);
+  append_value(out, index.evaluator_key);
+  append_value(out, static_cast<uint64_t>(index.clips.size()));
+  append_value(out, static_cast<uint64_t>(index.captions.size()));
+  for (const int clip : index.clips) append_value(out, static_cast<uint32_t>(clip));
+  append_values(out, index.clip_embeddings);
   for (const std::string& caption : index.captions) {
-    put(out, static_cast<uint32_t>(caption.size()));
+    append_value(out, static_cast<uint32_t>(caption.size()));
     out += caption;
   }
-  out.append(reinterpret_cast<const char*>(index.caption_embeddings.data()),
-             index.caption_embeddings.size() * sizeof(float));
+  append_values(out, index.caption_embeddings);
   return out;
 }
 
@@ -166,7 +109,7 @@ RetrievalIndex deserialize_retrieval_index(const std::string& bytes, const std::
   if (bytes.compare(0, sizeof kMagic, kMagic, sizeof kMagic) != 0) {
     throw InputError(path, 0, "not a retrieval index (bad magic); it will be rebuilt");
   }
-  Reader in(bytes, path);
+  ByteReader in(bytes, path, "the retrieval index");
   in.text(sizeof kMagic);
   if (in.get<uint32_t>() != kRetrievalIndexVersion) throw InputError(path, 0, "another index version; it will be rebuilt");
   RetrievalIndex index;
@@ -178,16 +121,16 @@ RetrievalIndex deserialize_retrieval_index(const std::string& bytes, const std::
     throw InputError(path, 0, "the retrieval index is damaged; it will be rebuilt");
   }
   for (uint64_t i = 0; i < clips; ++i) index.clips.push_back(static_cast<int>(in.get<uint32_t>()));
-  index.clip_embeddings = in.floats(clips * static_cast<uint64_t>(index.dim));
+  index.clip_embeddings = in.values<float>(clips * static_cast<uint64_t>(index.dim));
   for (uint64_t i = 0; i < captions; ++i) index.captions.push_back(in.text(in.get<uint32_t>()));
-  index.caption_embeddings = in.floats(captions * static_cast<uint64_t>(index.dim));
+  index.caption_embeddings = in.values<float>(captions * static_cast<uint64_t>(index.dim));
   if (!in.done()) throw InputError(path, 0, "the retrieval index has trailing bytes; it will be rebuilt");
   return index;
 }
 
 OpenedIndex open_retrieval_index(EvaluatorSession& session, const DatasetCache& cache, const std::string& evaluator_dir) {
   OpenedIndex opened;
-  const uint64_t evaluator = evaluator_key(evaluator_dir);
+  const uint64_t evaluator = train::checkpoint_key(evaluator_dir);
   const uint64_t cache_hash = cache_key(cache);
   if (!cache.directory.empty()) {
     opened.path = retrieval_index_path(cache, evaluator);

@@ -47,8 +47,7 @@ void EvaluatorTrainConfig::validate() const {
   require(steps >= 1 && batch_size >= 2, "steps must be >= 1 and batch_size >= 2");
   require(data.window_frames <= model.motion.max_frames(),
           "data.window_frames must be at most model.motion.max_frames() = " + std::to_string(model.motion.max_frames()));
-  require(log_every >= 0 && validate_every >= 0 && checkpoint_every >= 0,
-          "log_every, validate_every and checkpoint_every must be >= 0 (0: only at the end; validation: never)");
+  require(train::valid_cadence(log_every, validate_every, checkpoint_every), train::kCadenceRule);
 }
 
 void visit_fields(train::ConfigVisitor& v, EvaluatorTrainConfig& c) {
@@ -61,14 +60,7 @@ void visit_fields(train::ConfigVisitor& v, EvaluatorTrainConfig& c) {
 }
 
 EvaluatorTrainConfig read_evaluator_train_config(const std::string& path) {
-  json root;
-  try {
-    root = json::parse(read_file(path, size_t{1} << 24));
-  } catch (const json::parse_error& error) {
-    throw InputError(path, 0, std::string("not valid JSON: ") + error.what());
-  }
-  return train::read_valid_config<EvaluatorTrainConfig>(
-      root, {path, "`nec train evaluator --help` lists every field", "", false});
+  return train::read_config_file<EvaluatorTrainConfig>(path, "`nec train evaluator --help` lists every field");
 }
 
 at::Tensor contrastive_loss(const at::Tensor& motion, const at::Tensor& text, const at::Tensor& scale,

@@ -1102,4 +1102,13 @@ DatasetCache read_cache(const std::string& dir) {
   return cache;
 }
 
+uint64_t cache_key(const DatasetCache& cache) {
+  uint64_t key = kFnv1aOffset;
+  if (!cache.directory.empty()) {
+    key = fnv1a64(read_file((fs::path(cache.directory) / "manifest.json").string(), size_t{1} << 30));
+  }
+  const uint64_t clips = static_cast<uint64_t>(cache.clip_count());
+  return fnv1a64(std::string_view(reinterpret_cast<const char*>(&clips), sizeof clips), key);
+}
+
 }  // namespace nec

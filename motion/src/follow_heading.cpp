@@ -3,6 +3,7 @@
 
 #include "nec/motion/rotations.h"
 #include "nec/motion/segment.h"
+#include "nec/motion/smoothing.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,33 +13,6 @@
 
 namespace nec {
 namespace {
-
-// Weighted least-squares line through the values of a centred window of `width` frames (odd), read at its
-// centre: with equal weights the centred moving average inside the clip; near the ends, where the window is
-// cut short, a trend is followed to the last frame instead of flattened. Weights must be positive.
-std::vector<double> moving_line(const std::vector<double>& values, const std::vector<double>& weights, int width) {
-  const int n = static_cast<int>(values.size()), half = width / 2;
-  std::vector<double> out(values.size());
-  for (int t = 0; t < n; ++t) {
-    double w = 0.0, wx = 0.0, wxx = 0.0, wv = 0.0, wxv = 0.0;  // x: frames from t
-    for (int u = std::max(0, t - half); u < std::min(n, t + half + 1); ++u) {
-      const double x = u - t;
-      w += weights[u];
-      wx += weights[u] * x;
-      wxx += weights[u] * x * x;
-      wv += weights[u] * values[u];
-      wxv += weights[u] * x * values[u];
-    }
-    const double mean_x = wx / w, mean_v = wv / w, spread = wxx - w * mean_x * mean_x;
-    const double slope = spread > 1e-12 * w ? (wxv - w * mean_x * mean_v) / spread : 0.0;
-    out[t] = mean_v - slope * mean_x;
-  }
-  return out;
-}
-
-std::vector<double> smooth(const std::vector<double>& values, const std::vector<double>& weights, int width) {
-  return moving_line(moving_line(values, weights, width), weights, width);
-}
 
 // Root step from the frame before, horizontal, in body sizes; zero at frame 0.
 Vec3 root_step(const Motion& motion, int t, double size) {
@@ -86,8 +60,8 @@ HeadingReport follow_heading(const Clip& source, const Skeleton& skeleton, Motio
   // Both headings are unwrapped from their own first frame: take whole turns out of the difference there.
   const double whole_turns = 360.0 * std::round(difference[0] / 360.0);
   for (double& d : difference) d -= whole_turns;
-  const int width = 2 * static_cast<int>(std::lround(0.5 * options.smoothing_seconds * motion.fps)) + 1;
-  const std::vector<double> body_turn = smooth(difference, std::vector<double>(frames, 1.0), width);
+  const int width = odd_window_frames(options.smoothing_seconds, motion.fps);
+  const std::vector<double> body_turn = smooth_twice(difference, std::vector<double>(frames, 1.0), width);
 
   // The path's turn: per frame, the angle from the output's step to the source's (the representative nearest
   // the body's turn), weighted by the product of their lengths; where either stands still the body's turn
@@ -107,7 +81,7 @@ HeadingReport follow_heading(const Clip& source, const Skeleton& skeleton, Motio
     path_weight[t] = weight + prior;
     path_difference[t] = (weight * angle + prior * body_turn[t]) / path_weight[t];
   }
-  const std::vector<double> path_turn = smooth(path_difference, path_weight, width);
+  const std::vector<double> path_turn = smooth_twice(path_difference, path_weight, width);
 
   HeadingReport report;
   Vec3 previous = motion.translation(0, 0);

@@ -158,12 +158,9 @@ FootLockReport lock_feet(const Skeleton& skeleton, Motion& motion, const FootLoc
 
   Positions positions{{}, joints};
   joint_positions(skeleton, motion, positions.data);
-  std::vector<double> lowest(frames);
+  const std::vector<double> lowest = lowest_joint_heights(positions.data, joints);
   double root_path = 0.0;  // horizontal
-  for (int t = 0; t < frames; ++t) {
-    lowest[t] = positions.at(t, 0).y();
-    for (int j = 1; j < joints; ++j) lowest[t] = std::min(lowest[t], positions.at(t, j).y());
-    if (t == 0) continue;
+  for (int t = 1; t < frames; ++t) {
     Vec3 step = positions.at(t, 0) - positions.at(t - 1, 0);
     step.y() = 0.0;
     root_path += step.norm();

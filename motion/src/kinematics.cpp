@@ -67,6 +67,16 @@ double horizontal_speed(const std::vector<Vec3>& positions, int joints, int join
   return step.norm() * fps / (b - a);
 }
 
+std::vector<double> lowest_joint_heights(const std::vector<Vec3>& positions, int joints) {
+  const size_t frames = positions.size() / static_cast<size_t>(joints);
+  std::vector<double> lowest(frames);
+  for (size_t t = 0; t < frames; ++t) {
+    lowest[t] = positions[t * joints].y();
+    for (int j = 1; j < joints; ++j) lowest[t] = std::min(lowest[t], positions[t * joints + j].y());
+  }
+  return lowest;
+}
+
 std::vector<Vec3> end_site_positions(const Skeleton& skeleton, const Pose& pose) {
   const size_t sites = skeleton.end_sites.size();
   std::vector<Vec3> out(static_cast<size_t>(pose.frame_count) * sites);

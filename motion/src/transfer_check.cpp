@@ -65,14 +65,12 @@ std::vector<double> lowest_heights(const Clip& clip, double size) {
   const Motion& m = clip.motion;
   std::vector<Vec3> positions;
   joint_positions(clip.skeleton, m, positions);
+  const std::vector<double> lowest = lowest_joint_heights(positions, m.joint_count);
   const int window = std::max(1, static_cast<int>(std::lround(kFloorWindowSeconds * m.fps)));
   std::vector<double> out;
   for (int start = 0; start < m.frame_count; start += window) {
-    double lowest = std::numeric_limits<double>::infinity();
-    for (int t = start; t < std::min(start + window, m.frame_count); ++t) {
-      for (int j = 0; j < m.joint_count; ++j) lowest = std::min(lowest, positions[static_cast<size_t>(t) * m.joint_count + j].y());
-    }
-    out.push_back(lowest / size);
+    const auto end = lowest.begin() + std::min(start + window, m.frame_count);
+    out.push_back(*std::min_element(lowest.begin() + start, end) / size);
   }
   return out;
 }

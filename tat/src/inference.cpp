@@ -74,6 +74,12 @@ void WindowOptions::validate(int64_t downsampling) const {
 at::Tensor embed_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<Skeleton>& skeletons,
                            const std::vector<std::vector<std::string>>& canonical_names,
                            const text::WordVectors* vectors) {
+  return encode_skeletons(encoder, skeletons, canonical_names, vectors).joints;
+}
+
+owo::OwoOutput encode_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<Skeleton>& skeletons,
+                                const std::vector<std::vector<std::string>>& canonical_names,
+                                const text::WordVectors* vectors) {
   if (skeletons.size() != canonical_names.size()) {
     throw std::invalid_argument("embed_skeletons: one list of canonical names per skeleton");
   }
@@ -98,7 +104,7 @@ at::Tensor embed_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<Skele
   }
   c10::InferenceMode inference;
   const c10::Device device = encoder.parameters().front().device();
-  return encoder.forward(owo::collate(graphs, config.name_dim).to(device)).joints;
+  return encoder.forward(owo::collate(graphs, config.name_dim).to(device));
 }
 
 at::Tensor encode_clip(TokenizerImpl& tokenizer, const Features& features, const at::Tensor& embeddings,

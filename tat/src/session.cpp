@@ -86,7 +86,7 @@ TokenFile encode_file(TokenizerSession& session, const PreparedClip& source, con
 }
 
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path,
-                         UpAxis up, const Clip* heading_source, bool free_feet, const std::string& out_path) {
+                         UpAxis up, const DecodeCorrections& corrections, const std::string& out_path) {
   const TatConfig& config = session.model.tokenizer->config();
   if (tokens.layers > config.quantizer.layers || tokens.codebook_size != config.quantizer.codebook_size ||
       tokens.downsampling != config.downsampling()) {
@@ -106,8 +106,13 @@ DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, con
                        skeleton, tokens.fps, session.windows);
   Clip out{skeleton, decode_features(skeleton, features), {}};
   DecodeReport report;
-  if (heading_source != nullptr) report.heading = follow_heading(*heading_source, out.skeleton, out.motion);
-  if (!free_feet) report.feet = lock_feet(out.skeleton, out.motion);
+  const Clip* source = corrections.source;
+  if (source != nullptr && corrections.heading) report.heading = follow_heading(*source, out.skeleton, out.motion);
+  if (corrections.ground) {
+    report.ground = source != nullptr ? follow_ground(*source, out.skeleton, out.motion)
+                                      : settle_on_ground(out.skeleton, out.motion);
+  }
+  if (corrections.feet) report.feet = lock_feet(out.skeleton, out.motion);
   out = denormalize(out, with_heading(target.normalization, tokens.heading_degrees));
   write_bvh(out_path, out.skeleton, out.motion);
   return report;

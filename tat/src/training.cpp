@@ -56,8 +56,7 @@ void TatTrainConfig::validate() const {
           "data.window_frames must be a positive multiple of the downsampling " + std::to_string(model.downsampling()) +
               ", got " + std::to_string(data.window_frames));
   require(max_joint_frames >= 0, "max_joint_frames must be >= 0");
-  require(log_every >= 0 && validate_every >= 0 && checkpoint_every >= 0,
-          "log_every, validate_every and checkpoint_every must be >= 0 (0: only at the end; validation: never)");
+  require(train::valid_cadence(log_every, validate_every, checkpoint_every), train::kCadenceRule);
   require(validation_batches >= 1, "validation_batches must be >= 1");
 }
 
@@ -79,13 +78,7 @@ TatTrainConfig tat_train_config_from_json(const json& object, const std::string&
 }
 
 TatTrainConfig read_tat_train_config(const std::string& path) {
-  json root;
-  try {
-    root = json::parse(read_file(path, size_t{1} << 24));
-  } catch (const json::parse_error& error) {
-    throw InputError(path, 0, std::string("not valid JSON: ") + error.what());
-  }
-  return tat_train_config_from_json(root, path);
+  return tat_train_config_from_json(train::read_config_json(path), path);
 }
 
 struct TatTrainer::Inputs {

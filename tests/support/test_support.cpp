@@ -13,6 +13,24 @@ namespace nec::testing {
 
 std::string cmu_bvh_dir() { return NEC_CMU_BVH_DIR; }
 
+void make_captioned_zoo(const TempDir& d, int clips_per_creature, int seed, const std::string& prepare_options) {
+  const CommandResult zoo = run_nec("zoo --out " + d / "zoo" + " --creatures 9 --clips-per-creature " +
+                                    std::to_string(clips_per_creature) + " --seconds 2 --seed " + std::to_string(seed) +
+                                    " --hold-out spider --quiet");
+  ASSERT_EQ(zoo.exit_code, 0) << zoo.output;
+  const CommandResult prepare = run_nec("prepare zoo=" + d / "zoo/seen" + " zoo_held_out=" + d / "zoo/held_out" +
+                                        " --hold-out-dataset zoo_held_out -o " + d / "cache" + " --quiet " + prepare_options);
+  ASSERT_EQ(prepare.exit_code, 0) << prepare.output;
+  const CommandResult pieces =
+      run_nec("text train-tokenizer --data " + d / "cache" + " -o " + d / "spm.model" + " --vocab-size 150");
+  ASSERT_EQ(pieces.exit_code, 0) << pieces.output;
+  d.write("owo.json", R"({"encoder": {"name_dim": 0, "dim": 16, "layers": 1, "heads": 2, "edge_dim": 8},
+    "names": false, "batch_size": 4, "steps": 2, "log_every": 1, "validate_every": 0, "checkpoint_every": 0})");
+  const CommandResult owo =
+      run_nec("train owo --config " + d / "owo.json" + " --data " + d / "cache" + " --out " + d / "owo" + " --threads 1");
+  ASSERT_EQ(owo.exit_code, 0) << owo.output;
+}
+
 CommandResult run_nec(const std::string& arguments) {
   const std::string command = std::string(NEC_BINARY_DIR) + "/apps/nec " + arguments + " 2>&1";
   CommandResult run;

@@ -72,6 +72,12 @@ struct CommandResult {
   std::string output;
 };
 CommandResult run_nec(const std::string& arguments);
+// What the command-line tests of the text models share: `nec zoo` (9 creatures of `clips_per_creature` 2-s clips,
+// the spider held out, `seed`) into d/zoo, prepared into d/cache with the held-out spiders as the dataset
+// zoo_held_out (`prepare_options` added), a caption piece model of 150 pieces in d/spm.model and a tiny OwO
+// encoder without names in d/owo. A failing step fails the calling test (check HasFatalFailure()).
+void make_captioned_zoo(const TempDir& d, int clips_per_creature, int seed, const std::string& prepare_options = "");
+
 // The last line of `output` that starts with `prefix` ("" if none), e.g. the last "step 4/4" of a training log.
 std::string last_line_starting(const std::string& output, const std::string& prefix);
 

@@ -3,6 +3,7 @@
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
+#include "nec/motion/hash.h"
 
 #include <c10/util/Exception.h>
 #include <torch/torch.h>
@@ -233,6 +234,14 @@ void check_output_directory(const std::string& dir, bool resume, bool force) {
   if (exists && (!fs::is_directory(dir, ec) || !fs::is_empty(dir, ec))) {
     throw InputError(dir, 0, "exists and is not a checkpoint directory; choose another --out");
   }
+}
+
+uint64_t checkpoint_key(const std::string& dir) {
+  uint64_t key = kFnv1aOffset;
+  for (const char* file : {"config.json", "tensors.pt"}) {
+    key = fnv1a64(read_file((fs::path(dir) / file).string(), size_t{1} << 32), key);
+  }
+  return key;
 }
 
 }  // namespace nec::train

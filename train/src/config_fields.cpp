@@ -3,6 +3,7 @@
 #include "nec/train/config_fields.h"
 
 #include "nec/motion/error.h"
+#include "nec/motion/files.h"
 
 #include <algorithm>
 #include <limits>
@@ -171,6 +172,14 @@ void HelpWriter::visit(const FieldInfo& info, FieldValue value) {
 void HelpWriter::enter(const char* name, const char* help) {
   lines_.emplace_back(prefix() + name + ".", help);
   DottedVisitor::enter(name, help);
+}
+
+nlohmann::json read_config_json(const std::string& path) {
+  try {
+    return nlohmann::json::parse(read_file(path, size_t{1} << 24));
+  } catch (const nlohmann::json::parse_error& error) {
+    throw InputError(path, 0, std::string("not valid JSON: ") + error.what());
+  }
 }
 
 void visit_cadence_fields(ConfigVisitor& v, int64_t& steps, int64_t& log_every, int64_t& validate_every,

@@ -4,6 +4,7 @@
 #include "nec/layers/transformer.h"
 #include "nec/motion/error.h"
 #include "nec/text/caption_text.h"
+#include "nec/train/checkpoint_io.h"
 #include "nec/train/config_fields.h"
 
 #include <torch/torch.h>
@@ -44,6 +45,16 @@ void visit_fields(train::ConfigVisitor& v, TextEncoderConfig& c) {
   v.field("dropout", c.dropout, "transformer dropout in training");
   v.field("piece_dropout", c.piece_dropout,
           "chance a piece id is read as unknown in training, so that the word vectors are read too");
+}
+
+PieceModel load_checkpoint_pieces(const std::string& path, const TextEncoderConfig& config,
+                                  const train::JsonFields& fields) {
+  PieceModel pieces = PieceModel::load(path);
+  if (pieces.vocab_size() != config.vocab_size) {
+    fields.fail("the piece model has " + std::to_string(pieces.vocab_size()) + " pieces, the text encoder " +
+                std::to_string(config.vocab_size) + "; " + fields.hint());
+  }
+  return pieces;
 }
 
 TextBatch TextBatch::to(const c10::Device& device) const {

@@ -52,9 +52,7 @@ struct RetrievalIndex {
   std::vector<Match> nearest_captions(const at::Tensor& query, int k) const;
 };
 
-// The keys: a hash of the cache's manifest (and clip count), and of the evaluator's config.json and tensors.
-uint64_t cache_key(const DatasetCache& cache);
-uint64_t evaluator_key(const std::string& evaluator_dir);
+// The evaluator's key is train::checkpoint_key of its directory, the cache's nec::cache_key.
 std::string retrieval_index_path(const DatasetCache& cache, uint64_t evaluator_key);
 
 // Embeds every clip and distinct caption of `cache`.

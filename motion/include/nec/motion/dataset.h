@@ -187,6 +187,11 @@ std::vector<Split> assign_splits(const DatasetCache& cache, const SplitOptions& 
 // Indices of the skeletons that `options` holds out.
 std::vector<int> held_out_skeletons(const DatasetCache& cache, const SplitOptions& options);
 
+// A hash of the cache's manifest (and clip count): files derived from a cache
+// (retrieval indexes, GPT token sets) are keyed by it. A cache built in memory
+// hashes its clip count alone.
+uint64_t cache_key(const DatasetCache& cache);
+
 // Shell-style wildcard match: '*' any run of characters, '?' one character.
 bool wildcard_match(std::string_view pattern, std::string_view text);
 

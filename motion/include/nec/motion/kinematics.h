@@ -26,6 +26,8 @@ void joint_positions(const Skeleton& skeleton, const Motion& motion, std::vector
 // Horizontal (x, z) speed of `joint` at `frame`, units per second, from positions (T, J) as joint_positions
 // writes them: a centred difference, one-sided at the clip's ends; 0 for a single frame.
 double horizontal_speed(const std::vector<Vec3>& positions, int joints, int joint, int frame, double fps);
+// Height (y) of the lowest joint in each frame, from positions (T, J) as joint_positions writes them.
+std::vector<double> lowest_joint_heights(const std::vector<Vec3>& positions, int joints);
 // Global positions of the end sites, (T, E) in skeleton.end_sites order.
 std::vector<Vec3> end_site_positions(const Skeleton& skeleton, const Pose& pose);
 

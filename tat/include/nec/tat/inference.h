@@ -34,6 +34,10 @@ namespace nec::tat {
 at::Tensor embed_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<Skeleton>& skeletons,
                            const std::vector<std::vector<std::string>>& canonical_names,
                            const text::WordVectors* vectors);
+// All of the encoder's outputs for the same input: the joints as above and the skeleton node (B, D).
+owo::OwoOutput encode_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<Skeleton>& skeletons,
+                                const std::vector<std::vector<std::string>>& canonical_names,
+                                const text::WordVectors* vectors);
 
 struct WindowOptions {
   int64_t window_frames = 64;   // frames per window, e.g. the training crop; a multiple of the downsampling

@@ -5,9 +5,10 @@
 //   TokenizerSession session = open_tokenizer_session("runs/tat", /*glove=*/"", /*overlap_frames=*/-1);
 //   const PreparedClip walk = prepare_for_model("walk.bvh", session.model.info.fps, UpAxis::Auto);
 //   const TokenFile tokens = encode_file(session, walk, "walk.bvh");
-//   decode_onto(session, tokens, "dragon.bvh", UpAxis::Auto, &walk.clip, /*free_feet=*/false, "dragon_walk.bvh");
+//   decode_onto(session, tokens, "dragon.bvh", UpAxis::Auto, {&walk.clip}, "dragon_walk.bvh");
 #pragma once
 
+#include "nec/motion/follow_ground.h"
 #include "nec/motion/follow_heading.h"
 #include "nec/motion/foot_lock.h"
 #include "nec/motion/preprocess.h"
@@ -52,18 +53,26 @@ Normalization with_heading(const Normalization& target, double heading_degrees);
 // Tokens of one clip prepared for the model; `path` names its file in the token file.
 TokenFile encode_file(TokenizerSession& session, const PreparedClip& source, const std::string& path);
 
+// What decode_onto does to the decoded motion before writing it.
+struct DecodeCorrections {
+  const Clip* source = nullptr;  // the clip the tokens came from, prepared for the model (a transfer), or none
+  bool heading = true;           // with a source: turn body and path to face and go where it does
+  bool ground = true;            // stand on the floor where the source stands (follow_ground), else settle onto it
+  bool feet = true;              // pin the feet the motion puts down (lock_feet)
+};
+
 // What decode_onto did after decoding.
 struct DecodeReport {
   std::optional<HeadingReport> heading;  // steered to follow a source's facing and path
+  std::optional<GroundReport> ground;    // lifted or lowered onto the floor
   FootLockReport feet;
 };
 
-// Decodes tokens onto the skeleton of `target_path`, steers it to face and go
-// where `heading_source` does (when given: the clip the tokens came from,
-// prepared for the model), pins the feet it puts down unless `free_feet`, and
-// writes `out_path` in that file's units, up axis, joint names, channels and
-// Euler orders. InputError when the tokens do not fit the model.
+// Decodes tokens onto the skeleton of `target_path`, applies `corrections` in
+// their order above, and writes `out_path` in that file's units, up axis,
+// joint names, channels and Euler orders. InputError when the tokens do not
+// fit the model.
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path, UpAxis up,
-                         const Clip* heading_source, bool free_feet, const std::string& out_path);
+                         const DecodeCorrections& corrections, const std::string& out_path);
 
 }  // namespace nec::tat

@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <type_traits>
@@ -96,6 +97,11 @@ void copy_module_tensors(torch::nn::Module& from, torch::nn::Module& to);
 // without a config.json. Anything `fill` throws removes the temporary and is rethrown.
 void write_checkpoint_directory(const std::string& dir, const std::string& what,
                                 const std::function<void(const std::string& temp_dir)>& fill);
+
+// A hash of the checkpoint's config.json and tensors.pt: what files derived
+// from a model (retrieval indexes, GPT token sets) are keyed by. InputError
+// naming the file when one cannot be read.
+uint64_t checkpoint_key(const std::string& dir);
 
 // The --out of a training run before anything is written: with `resume` it
 // must hold a checkpoint (a config.json); without, it must not hold one unless

@@ -169,6 +169,15 @@ class HelpWriter final : public DottedVisitor {
 // validation: never), each one a resumed run may change.
 void visit_cadence_fields(ConfigVisitor& v, int64_t& steps, int64_t& log_every, int64_t& validate_every,
                           int64_t& checkpoint_every);
+// What every config's validate() says when a cadence field is negative.
+inline constexpr const char* kCadenceRule =
+    "log_every, validate_every and checkpoint_every must be >= 0 (0: only at the end; validation: never)";
+inline bool valid_cadence(int64_t log_every, int64_t validate_every, int64_t checkpoint_every) {
+  return log_every >= 0 && validate_every >= 0 && checkpoint_every >= 0;
+}
+
+// The JSON of a config file; InputError naming the file when it cannot be read or is not valid JSON.
+nlohmann::json read_config_json(const std::string& path);
 
 // Reads `root` into a default-constructed Config (validation is the caller's).
 template <typename Config>
@@ -202,6 +211,12 @@ Config read_config_object(const nlohmann::json& parent, const std::string& key, 
   const auto it = parent.find(key);
   options.prefix += key + ".";
   return read_config<Config>(it == parent.end() ? kAbsent : *it, std::move(options));
+}
+
+// A training config file's whole check: read_config_json, then read_valid_config with `hint` ending each error.
+template <typename Config>
+Config read_config_file(const std::string& path, const std::string& hint) {
+  return read_valid_config<Config>(read_config_json(path), {path, hint, "", false});
 }
 
 template <typename Config>

@@ -36,6 +36,7 @@
 
 namespace nec::train {
 class ConfigVisitor;
+class JsonFields;
 }
 namespace nec::layers {
 class TransformerStackImpl;
@@ -60,6 +61,11 @@ struct TextEncoderConfig {
   void validate() const;
 };
 void visit_fields(train::ConfigVisitor& v, TextEncoderConfig& c);  // train/config_fields.h
+
+// The piece model a checkpoint's text encoder reads, from `path`; a piece count other than
+// config.vocab_size fails through `fields` (naming the checkpoint's config.json and its hint).
+PieceModel load_checkpoint_pieces(const std::string& path, const TextEncoderConfig& config,
+                                  const train::JsonFields& fields);
 
 // Captions as tensors, padded to the longest.
 struct TextBatch {

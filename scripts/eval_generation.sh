@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Generated motion judged like real motion: for every captioned clip of a cache split, `nec generate` writes
+# a motion for the clip's first caption onto the clip's own skeleton file, as long as the clip; then
+# `nec eval t2m` compares them with the real clips (R-Precision, FID, MM-Dist, Diversity, Coverage/Novelty,
+# jitter), per dataset.
+#   scripts/eval_generation.sh GPT_CKPT CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES]
+# SPLIT: test (default) or val; SAMPLES per caption (default 1; 2 or more also give Multimodality).
+# Writes OUT_DIR/generated/<dataset>/*.bvh (+ caption sidecars), OUT_DIR/t2m.md and OUT_DIR/t2m.json.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if [ $# -lt 4 ]; then
+  echo "usage: scripts/eval_generation.sh GPT_CKPT CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES]" >&2
+  exit 2
+fi
+model=$1 cache=$2 evaluator=$3 out=$4 split=${5:-test} samples=${6:-1}
+nec=${NEC:-build/apps/nec}
+mkdir -p "$out/generated"
+started=$SECONDS
+# One line per clip: dataset, source file, seconds, first caption (tab-separated).
+python3 - "$cache/manifest.json" "$split" > "$out/clips.tsv" <<'PY'
+import json, sys
+manifest = json.load(open(sys.argv[1]))
+for clip in manifest["clips"]:
+    if clip["split"] == sys.argv[2] and clip["captions"]:
+        print("\t".join([clip["dataset"], clip["source"], "%.3f" % (clip["frames"] / clip["fps"]), clip["captions"][0]]))
+PY
+count=0
+while IFS=$'\t' read -r dataset source seconds caption; do
+  count=$((count + 1))
+  mkdir -p "$out/generated/$dataset"
+  "$nec" generate "$caption" --skeleton "$source" --model "$model" --seconds "$seconds" --samples "$samples" \
+    --seed "$count" -o "$out/generated/$dataset/$(printf %04d "$count").bvh" --force --threads 2 > /dev/null
+done < "$out/clips.tsv"
+echo "generated $count clips of the $split split in $((SECONDS - started)) s"
+"$nec" eval t2m --generated "$out/generated" --reference "$cache" --evaluator "$evaluator" --split "$split" \
+  --json "$out/t2m.json" | tee "$out/t2m.md"

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Trains the default models (models/default/) that `nec generate`, `nec transfer`, `nec retrieve` and
+# `nec demo` use when no model is given, on data the project may ship models of: the zoo (every body
+# plan but the hexapod, kept out so the demo can show a plan the models never saw) and Debian's CMU
+# files. Not ../shared/data: its licenses are non-commercial.
+#   scripts/train_default_models.sh [WORK_DIR] [OUT_DIR]     # defaults: out/default-models, models/default
+# About 90 minutes on 2 cores. Writes OUT_DIR/{gpt,evaluator} (the GPT holds its tokenizer in gpt/tat,
+# which holds its OwO encoder) without their training state, and OUT_DIR/README.md's numbers come from
+# the `nec eval` lines this script prints at the end.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+work=${1:-out/default-models} out=${2:-models/default}
+nec=${NEC:-build/apps/nec}  # NEC=...: another nec binary (e.g. a copy, while build/ is rebuilt)
+started=$SECONDS
+step() { echo; echo "== [$(( (SECONDS - started) / 60 )) min] $*"; }
+mkdir -p "$work"
+
+step "data: zoo (hexapods held out) and CMU"
+"$nec" zoo --out "$work/zoo" --creatures 90 --clips-per-creature 8 --seed 11 --hold-out hexapod --quiet
+"$nec" prepare zoo="$work/zoo/seen" zoo_held_out="$work/zoo/held_out" cmu=/usr/share/assimp/models/BVH \
+  --hold-out-dataset zoo_held_out --creature cmu=person -o "$work/cache" --quiet
+"$nec" text train-tokenizer --data "$work/cache" -o "$work/spm.model" --force
+
+step "skeleton encoder"
+"$nec" train owo --config configs/owo_default.json --data "$work/cache" --out "$work/owo" --threads 2 --force
+
+step "tokenizer and evaluator, side by side (1 thread each)"
+"$nec" train tat --config configs/tat_cpu.json --data "$work/cache" --owo "$work/owo" --out "$work/tat" \
+  --threads 1 --force > "$work/tat.log" 2>&1 &
+tat=$!
+"$nec" train evaluator --config configs/evaluator_cpu.json --data "$work/cache" --owo "$work/owo" \
+  --pieces "$work/spm.model" --out "$work/evaluator" --threads 1 --force > "$work/evaluator.log" 2>&1 &
+evaluator=$!
+wait $tat || { tail -n 20 "$work/tat.log"; exit 1; }
+wait $evaluator || { tail -n 20 "$work/evaluator.log"; exit 1; }
+tail -n 3 "$work/tat.log" "$work/evaluator.log"
+
+step "GPT"
+"$nec" train gpt --config configs/gpt_cpu.json --data "$work/cache" --tat "$work/tat" --pieces "$work/spm.model" \
+  --out "$work/gpt" --threads 2 --force
+
+step "copy into $out (models only, no training state)"
+rm -rf "$out.tmp"
+mkdir -p "$out.tmp"
+cp -r "$work/gpt" "$out.tmp/gpt"
+cp -r "$work/evaluator/best" "$out.tmp/evaluator"
+find "$out.tmp" \( -name training.json -o -name optimizer.pt \) -delete
+rm -rf "$out.tmp/evaluator/best"
+[ -f "$out/README.md" ] && cp "$out/README.md" "$out.tmp/README.md"
+rm -rf "$out"
+mv "$out.tmp" "$out"
+du -sh "$out"
+step "done in $(( (SECONDS - started) / 60 )) min"

@@ -1,0 +1,153 @@
+// The GPT's commands end to end on a tiny zoo: nec train gpt (tokens stored
+// beside the cache, checkpoints, --resume), nec generate onto a skeleton the
+// models never saw (its names, channels and length; samples, seeds,
+// several captions), and the errors a user sees.
+#include "nec/motion/bvh.h"
+#include "nec/motion/files.h"
+#include "test_support.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+
+namespace nec {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CommandResult;
+using testing::contains;
+using testing::run_nec;
+
+class CliGpt : public testing::SharedFolderTest {
+ protected:
+  // A zoo cache (the spider held out), its piece model, a tiny OwO, tokenizer and GPT.
+  static void SetUpTestSuite() {
+    SharedFolderTest::SetUpTestSuite();
+    const testing::TempDir& d = shared_folder();
+    testing::make_captioned_zoo(d, 4, 6, "--val 0.2 --test 0.1");
+    if (HasFatalFailure()) return;
+    write_file_atomic(d / "tat.json", R"({"model": {"kind": "nec-rvq", "dim": 16, "blocks": 2, "attention_layers": 1,
+      "heads": 2, "quantizer": {"layers": 2, "codebook_size": 16, "code_dim": 16}},
+      "steps": 4, "batch_size": 4, "data": {"window_frames": 16}, "log_every": 2, "validate_every": 0,
+      "checkpoint_every": 0, "seed": 1})");
+    const CommandResult tat = run_nec("train tat --config " + d / "tat.json" + " --data " + d / "cache" + " --owo " +
+                                      d / "owo" + " --out " + d / "tat" + " --threads 1");
+    ASSERT_EQ(tat.exit_code, 0) << tat.output;
+    write_file_atomic(d / "gpt.json", R"({
+      "model": {"dim": 32, "layers": 2, "heads": 2, "feedforward": 64, "max_steps": 16,
+                "text": {"word_dim": 0, "dim": 16, "heads": 2, "feedforward": 32, "layers": 1, "max_pieces": 128, "output_dim": 16}},
+      "batch_size": 8, "steps": 6, "log_every": 2, "validate_every": 3, "checkpoint_every": 3, "seed": 2})");
+    const CommandResult gpt = run_nec(train_gpt(d / "gpt"));
+    ASSERT_EQ(gpt.exit_code, 0) << gpt.output;
+    training_output() = gpt.output;
+  }
+
+  static std::string& training_output() {
+    static std::string output;
+    return output;
+  }
+  static std::string train_gpt(const std::string& out, const std::string& extra = "") {
+    const testing::TempDir& d = shared_folder();
+    return "train gpt --config " + d / "gpt.json" + " --data " + d / "cache" + " --tat " + d / "tat" + " --pieces " +
+           d / "spm.model" + " --out " + out + " --threads 1 " + extra;
+  }
+  // The held-out spider's first clip: a skeleton no model saw.
+  static std::string spider() { return testing::bvh_files_under(shared("zoo/held_out")).front(); }
+  static std::string generate(const std::string& arguments) {
+    return "generate " + arguments + " --model " + shared("gpt") + " --threads 1";
+  }
+};
+
+TEST_F(CliGpt, TrainingStoresTheTokensOnceAndResumes) {
+  const std::string& output = training_output();
+  EXPECT_TRUE(contains(output, "stored in " + shared("cache") + "/gpt-tokens-")) << output;
+  EXPECT_TRUE(contains(output, "validation at step 3: val_loss")) << output;
+  const nlohmann::json config = nlohmann::json::parse(read_file(shared("gpt/config.json")));
+  EXPECT_EQ(config["format"], "nec-gpt");
+  EXPECT_EQ(config["training_step"], 6);
+  EXPECT_EQ(config["gpt"]["codebook_layers"], 2);
+  EXPECT_EQ(config["gpt"]["codebook_size"], 16);
+  EXPECT_TRUE(fs::exists(shared("gpt/tat/owo/config.json")));
+  EXPECT_TRUE(fs::exists(shared("gpt/pieces.model")));
+
+  // A second run reads the stored tokens; a resumed copy goes on from step 6.
+  fs::copy(shared("gpt"), path("gpt"), fs::copy_options::recursive);
+  const CommandResult resumed = run_nec(train_gpt(path("gpt"), "--resume --steps 8"));
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_TRUE(contains(resumed.output, "steps 7-8 of")) << resumed.output;
+  EXPECT_FALSE(contains(resumed.output, "stored in")) << resumed.output;
+  EXPECT_EQ(nlohmann::json::parse(read_file(path("gpt/config.json")))["training_step"], 8);
+  // Into a finished checkpoint without --resume or --force: refused, nothing touched.
+  const CommandResult again = run_nec(train_gpt(path("gpt")));
+  EXPECT_EQ(again.exit_code, 1) << again.output;
+}
+
+TEST_F(CliGpt, GeneratesOnASkeletonNoModelSaw) {
+  const std::string out = path("spider_walk.bvh");
+  const CommandResult run = run_nec(generate("\"a spider walks forward\" --skeleton " + spider() + " -o " + out +
+                                             " --seconds 1 --seed 3"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const Clip source = read_bvh(spider());
+  const Clip made = read_bvh(out);
+  EXPECT_EQ(made.motion.frame_count, 32);  // 1 s at 30 fps: 8 steps of 4 frames
+  EXPECT_EQ(read_file(path("spider_walk.txt")), "a spider walks forward\n");  // what `nec eval t2m` reads
+  ASSERT_EQ(made.skeleton.joint_count(), source.skeleton.joint_count());
+  for (int j = 0; j < made.skeleton.joint_count(); ++j) {
+    EXPECT_EQ(made.skeleton.names[j], source.skeleton.names[j]);
+    EXPECT_EQ(made.skeleton.channels[j].euler_order(), source.skeleton.channels[j].euler_order());
+  }
+  // The same seed writes the same file; samples 1..K are seeds 3, 4, ...: the first is the one above.
+  const std::string again = path("again.bvh");
+  ASSERT_EQ(run_nec(generate("\"a spider walks forward\" --skeleton " + spider() + " -o " + again +
+                             " --seconds 1 --seed 3")).exit_code, 0);
+  EXPECT_EQ(read_file(again), read_file(out));
+  const CommandResult many = run_nec(generate("\"a spider walks forward\" --skeleton " + spider() + " -o " +
+                                              path("many.bvh") + " --seconds 1 --seed 3 --samples 2 --view " +
+                                              path("many.html")));
+  ASSERT_EQ(many.exit_code, 0) << many.output;
+  EXPECT_EQ(read_file(path("many_1.bvh")), read_file(out));
+  EXPECT_NE(read_file(path("many_2.bvh")), read_file(out));
+  EXPECT_FALSE(fs::exists(path("many.bvh")));
+  EXPECT_TRUE(fs::exists(path("many.html")));
+
+  // Two captions: two segments of 1 s, one motion.
+  const CommandResult two = run_nec(generate("\"a spider walks forward\" \"a spider turns left\" --skeleton " + spider() +
+                                             " -o " + path("two.bvh") + " --seconds 1"));
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  EXPECT_EQ(read_bvh(path("two.bvh")).motion.frame_count, 64);
+  // Without --seconds the GPT ends the motion (at most max_steps - 1 = 15 steps).
+  const CommandResult open = run_nec(generate("\"a spider walks\" --skeleton " + spider() + " -o " + path("open.bvh")));
+  ASSERT_EQ(open.exit_code, 0) << open.output;
+  const int frames = read_bvh(path("open.bvh")).motion.frame_count;
+  EXPECT_GE(frames, 4 * 4);
+  EXPECT_LE(frames, 15 * 4);
+}
+
+TEST_F(CliGpt, BadInputGetsOneLineAndNoOutput) {
+  const std::string out = path("out.bvh");
+  const auto expect_refused = [&](const std::string& arguments, const std::string& message) {
+    const CommandResult run = run_nec(arguments);
+    EXPECT_EQ(run.exit_code, 1) << arguments << "\n" << run.output;
+    EXPECT_TRUE(contains(run.output, message)) << arguments << "\n" << run.output;
+    EXPECT_FALSE(fs::exists(out)) << arguments;
+  };
+  expect_refused(generate("\"\" --skeleton " + spider() + " -o " + out), "empty");
+  expect_refused(generate("\"!! ??\" --skeleton " + spider() + " -o " + out), "letter");
+  expect_refused(generate("\"a spider walks\" --skeleton " + path("none.bvh") + " -o " + out), "none.bvh");
+  expect_refused(generate("\"a spider walks\" --skeleton " + spider() + " -o " + out + " --seconds 0"), "--seconds");
+  expect_refused(generate("\"a spider walks\" --skeleton " + spider() + " -o " + out + " --seconds 999"), "--seconds");
+  expect_refused("generate \"a spider walks\" --skeleton " + spider() + " -o " + out + " --model " + shared("tat"),
+                 "not a GPT checkpoint");
+  // An existing output is not overwritten without --force.
+  write_file_atomic(out, "mine");
+  const CommandResult kept = run_nec(generate("\"a spider walks\" --skeleton " + spider() + " -o " + out));
+  EXPECT_EQ(kept.exit_code, 1) << kept.output;
+  EXPECT_EQ(read_file(out), "mine");
+  EXPECT_EQ(run_nec(generate("\"a spider walks\" --skeleton " + spider() + " -o " + out + " --force --seconds 1")).exit_code, 0);
+  EXPECT_NE(read_file(out), "mine");
+}
+
+}  // namespace
+}  // namespace nec
