@@ -17,15 +17,19 @@
 #       The text-motion evaluator (configs/evaluator_cpu.json): captions encoded
 #       per second, clips embedded per second (22 and 100 joints), and a
 #       retrieval query over a 10,000-clip index (goal: < 20 ms on 2 cores).
+#   scripts/bench.sh gpt
+#       Generation: a 4-s motion from text to BVH on disk with the default GPT
+#       (one sample, goal < 0.5 s; 32 samples, goal < 3 s), and sampled tokens
+#       per second with and without the KV cache at 4, 16 and 64 s.
 # Raw results in build-bench/: bench_motion.json, peer_threejs.json,
-# bench_tat_step{1,2}.json, peer_tat_step{1,2}.json, bench_tat_clip.json, bench_evaluator.json
+# bench_tat_step{1,2}.json, peer_tat_step{1,2}.json, bench_tat_clip.json, bench_evaluator.json, bench_gpt.json
 # (NEC_BENCH_BUILD=DIR builds and writes in DIR instead).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 section=all
 case "${1:-}" in
-  motion | tat | evaluator) section=$1; shift ;;
+  motion | tat | evaluator | gpt) section=$1; shift ;;
 esac
 if [ "$section" != motion ] && [ "$section" != all ] && [ $# -gt 0 ]; then
   echo "bench.sh: '$section' takes no arguments" >&2
@@ -229,9 +233,34 @@ print()
 PY
 }
 
+bench_gpt() {
+  cmake --build "$build" --target bench_gpt
+  OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive} "$build"/benchmarks/bench_gpt --benchmark_format=console \
+    --benchmark_out="$build"/bench_gpt.json --benchmark_out_format=json >/dev/null
+  "$python" - "$build"/bench_gpt.json <<'PY'
+import json, sys
+rows = json.load(open(sys.argv[1]))["benchmarks"]
+def median(name, field="real_time"):
+    found = [r for r in rows if r["run_name"] == name and r.get("aggregate_name") == "median"]
+    return found[0][field] if found else float("nan")
+print("""
+| generation, median of 5, 2 cores | value |
+|---|---:|""")
+for samples, goal in ((1, 500), (32, 3000)):
+    print(f"| text to BVH, 4-s motion, {samples} sample(s), ms (goal < {goal}) | {median(f'BM_TextToBvh/samples:{samples}'):.0f} |")
+print("""
+| sampled tokens per second | 4 s | 16 s | 64 s |
+|---|---:|---:|---:|""")
+for cache, label in ((1, "KV cache"), (0, "no cache (window recomputed each step)")):
+    print(f"| {label} | " + " | ".join(f"{median(f'BM_SampleTokens/seconds:{s}/cache:{cache}', 'tokens_per_s'):.0f}" for s in (4, 16, 64)) + " |")
+print()
+PY
+}
+
 case "$section" in
   motion) bench_motion "$@" ;;
   tat) bench_tat ;;
   evaluator) bench_evaluator ;;
-  all) bench_motion "$@"; bench_tat; bench_evaluator ;;
+  gpt) bench_gpt ;;
+  all) bench_motion "$@"; bench_tat; bench_evaluator; bench_gpt ;;
 esac
