@@ -4,7 +4,10 @@
 // and viewer pages to look at.
 #include "command_line.h"
 #include "commands.h"
+#include "model_options.h"
 
+#include "nec/evaluator/retrieval_index.h"
+#include "nec/gpt/generation.h"
 #include "nec/motion/augment.h"
 #include "nec/motion/bvh.h"
 #include "nec/motion/corpus.h"
@@ -16,6 +19,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <map>
@@ -42,14 +46,107 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// A player page of `clips` at `path` and a strip of the first of them beside it (same name, .png).
+void write_page(const fs::path& path, const std::string& title, const std::vector<viewer::ViewClip>& clips) {
+  viewer::ViewOptions page;
+  page.title = title;
+  write_file_atomic(path.string(), viewer::make_view_html(clips, page));
+  viewer::StripOptions strip;
+  strip.frames = 5;
+  strip.panel_height = 160;
+  viewer::write_png(fs::path(path).replace_extension(".png").string(), viewer::render_strip(clips.front().clip, strip));
+}
+
+// The three uses with the default models (models/default/): transfers between body plans, generation from each
+// plan's own short caption (the hexapod is a plan the default models never saw) and text queries against the
+// demo's cache. `clips_by_plan`: the first zoo clip of each plan with its short caption. Returns the pages written.
+std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& out,
+                                                                const std::vector<std::pair<std::string, std::string>>& clips_by_plan,
+                                                                const DatasetCache& cache) {
+  const std::string gpt_dir = default_model_dir("gpt"), evaluator_dir = default_model_dir("evaluator");
+  if (gpt_dir.empty() || evaluator_dir.empty() || !fs::exists(text::default_word_vectors_path())) {
+    fmt::print("note: no default models in models/default (scripts/train_default_models.sh) or no word vectors "
+               "(nec text import-glove): no transfers, generation or retrieval\n");
+    return {};
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path models = out / "models";
+  fs::create_directories(models);
+  gpt::GeneratorSession session = gpt::open_generator(gpt_dir, "");
+  const double fps = session.fps();
+  std::vector<std::pair<std::string, std::string>> pages;
+
+  // Transfers: the clip of each plan onto the skeleton of the next plan.
+  std::vector<viewer::ViewClip> transfers;
+  for (size_t i = 0; i + 1 < clips_by_plan.size() && transfers.size() < 10; ++i) {
+    const auto& [source_path, caption] = clips_by_plan[i];
+    const std::string& target_path = clips_by_plan[i + 1].first;
+    const std::string result = (models / fmt::format("transfer_{}.bvh", i + 1)).string();
+    const PreparedClip source = tat::prepare_for_model(source_path, fps, UpAxis::Auto);
+    tat::DecodeCorrections corrections;
+    corrections.source = &source.clip;
+    tat::decode_onto(session.tokenizer, tat::encode_file(session.tokenizer, source, source_path), target_path, UpAxis::Auto,
+                     corrections, result);
+    transfers.push_back(viewer::load_view_clip(source_path));
+    transfers.back().captions = {caption};
+    transfers.push_back(viewer::load_view_clip(result));
+    transfers.back().name = "onto " + fs::path(target_path).stem().string();
+  }
+  if (!transfers.empty()) {
+    write_page(models / "transfers.html", "nec demo: transfers between body plans (source, then result)", transfers);
+    pages.emplace_back("Transfer: each clip onto the next body plan", "models/transfers");
+  }
+
+  // Generation: each plan's own short caption, 4 s, on its skeleton.
+  std::vector<viewer::ViewClip> generated;
+  gpt::SamplingOptions sampling;
+  for (size_t i = 0; i < clips_by_plan.size() && i < 5; ++i) {
+    const auto& [skeleton_path, caption] = clips_by_plan[i];
+    const PreparedClip target = tat::prepare_for_model(skeleton_path, fps, UpAxis::Auto);
+    const int64_t steps = static_cast<int64_t>(4.0 * fps) / session.downsampling();
+    const at::Tensor codes = gpt::generate_codes(session, target, {{caption, steps}}, 1, sampling).front();
+    const std::string result = (models / fmt::format("generated_{}.bvh", i + 1)).string();
+    tat::decode_onto(session.tokenizer, session.token_file(codes, caption), skeleton_path, UpAxis::Auto, {}, result);
+    generated.push_back(viewer::load_view_clip(result));
+    generated.back().captions = {caption};
+  }
+  if (!generated.empty()) {
+    write_page(models / "generated.html", "nec demo: generated from text, one body plan each", generated);
+    pages.emplace_back("Generate: motion from a caption on each body plan", "models/generated");
+  }
+
+  // Retrieval: three queries against the demo's own cache.
+  evaluator::EvaluatorSession retrieval = evaluator::open_evaluator(evaluator_dir, "");
+  const evaluator::OpenedIndex opened = evaluator::open_retrieval_index(retrieval, cache, evaluator_dir);
+  std::vector<viewer::ViewClip> matches;
+  for (const std::string query : {"a person walks forward", "a dog runs", "a creature turns to the left"}) {
+    const std::vector<evaluator::Match> top = opened.index.nearest_clips(retrieval.embed_captions({query}, "query"), 3, {});
+    fmt::print("retrieve \"{}\":", query);
+    for (const evaluator::Match& m : top) {
+      const int clip = opened.index.clips[static_cast<size_t>(m.row)];
+      const CacheClip& c = cache.clips[static_cast<size_t>(clip)];
+      fmt::print(" {} ({:.2f})", fs::path(c.source).stem().string(), m.score);
+      matches.push_back({fmt::format("\"{}\" {:.2f}", query, m.score), c.captions, cache.clip(clip)});
+    }
+    fmt::print("\n");
+  }
+  write_page(models / "retrieved.html", "nec demo: the top 3 clips of the cache for three captions", matches);
+  pages.emplace_back("Retrieve: the cache's best clips for three captions", "models/retrieved");
+  fmt::print("default models: {} transfers, {} generated clips, 3 queries in {:.1f} s ({})\n", transfers.size() / 2,
+             generated.size(), seconds_since(start), models.string());
+  return pages;
+}
+
 }  // namespace
 
 int run_demo(int argc, char** argv) {
   CommandLine cli("nec demo",
                   "Run the pipeline on built-in data: make a small zoo of procedural creatures, prepare it with\n"
                   "the CMU motion capture files from Debian (and --extra inputs) into a dataset cache, print a\n"
-                  "table per body plan, and write normalized and rig-augmented BVH, PNG strips and viewer pages.");
-  cli.option("--out", "DIR", "out/demo", "output folder (its zoo/, cache/, bvh/, strips/ and *.html are replaced)");
+                  "table per body plan, and write normalized and rig-augmented BVH, PNG strips and viewer pages.\n"
+                  "With the default models (models/default): transfers between the body plans, motion generated\n"
+                  "from each plan's caption, and three text queries against the cache. DIR/index.html shows all.");
+  cli.option("--out", "DIR", "out/demo", "output folder (its zoo/, cache/, bvh/, strips/, models/ and *.html are replaced)");
   cli.option("--creatures", "N", "9", "zoo creatures (one per body plan for 9)");
   cli.option("--clips-per-creature", "M", "3", "zoo clips per creature");
   cli.option("--seed", "N", "0", "seed of the zoo, the splits and the augmentations");
@@ -61,7 +158,7 @@ int run_demo(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   const fs::path out = cli.value("--out");
   const int seed = cli.integer("--seed");
-  for (const char* part : {"zoo", "cache", "bvh", "strips"}) {
+  for (const char* part : {"zoo", "cache", "bvh", "strips", "models"}) {
     const std::string failure = remove_tree((out / part).string());
     if (!failure.empty()) throw std::runtime_error(failure);
   }
@@ -167,10 +264,34 @@ int run_demo(int argc, char** argv) {
   if (viewer::have_three()) {
     viewer::ViewOptions page;
     page.title = "nec demo: one normalized clip per body plan";
-    write_file_atomic((out / "index.html").string(), viewer::make_view_html(normalized_views, page));
+    write_file_atomic((out / "clips.html").string(), viewer::make_view_html(normalized_views, page));
     page.title = "nec demo: rig augmentations of one clip";
     write_file_atomic((out / "augmented.html").string(), viewer::make_view_html(augmented_views, page));
-    pages = {(out / "index.html").string(), (out / "augmented.html").string()};
+    // 5. The models' uses, and one page that links everything.
+    std::vector<std::pair<std::string, std::string>> sections = {{"Data: one normalized clip per body plan", "clips"},
+                                                                 {"Rig augmentation of one clip", "augmented"}};
+    std::vector<std::pair<std::string, std::string>> clips_by_plan;  // zoo file, short caption
+    std::set<zoo::BodyPlan> plans;
+    for (const zoo::ZooClip& c : zoo_summary.clips) {
+      if (plans.insert(c.plan).second) clips_by_plan.emplace_back((out / "zoo" / c.bvh_file).string(), c.captions.short_text);
+    }
+    for (const auto& section : run_model_demo(out, clips_by_plan, cache)) sections.push_back(section);
+    std::string index = "<!doctype html><meta charset=utf-8><title>nec demo</title><body style=\"font-family:sans-serif\">"
+                        "<h1>nec demo</h1>";
+    for (const auto& [title, page_stem] : sections) {
+      index += fmt::format("<h2>{}</h2><p><a href=\"{}.html\">play</a></p>", title, page_stem);
+      // A strip of each normalized clip under the data, the strip of each page's first clip under the others.
+      std::vector<std::string> images;
+      if (page_stem == "clips") {
+        for (const auto& entry : fs::directory_iterator(out / "strips")) images.push_back("strips/" + entry.path().filename().string());
+        std::sort(images.begin(), images.end());
+      } else if (fs::exists(out / (page_stem + ".png"))) {
+        images.push_back(page_stem + ".png");
+      }
+      for (const std::string& image : images) index += fmt::format("<p><img src=\"{}\" style=\"max-width:100%\"></p>", image);
+    }
+    write_file_atomic((out / "index.html").string(), index + "</body>\n");
+    pages = {(out / "index.html").string(), (out / "clips.html").string(), (out / "augmented.html").string()};
   } else {
     fmt::print("note: three.js was not built in (run scripts/setup.sh); no HTML pages written\n");
   }

@@ -7,6 +7,7 @@
 # ../shared/data when present, else from the zoo's biped and quadruped.
 # Writes OUT_DIR/*.bvh, OUT_DIR/transfers.html and the transfer checks
 # (`nec eval transfer`) in OUT_DIR/transfers.md and transfers.json.
+# NEC_TRANSFER_FLAGS="--free-height" (or other transfer options) is added to every transfer, to compare.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -ne 3 ]; then
@@ -49,7 +50,8 @@ pairs=(
 files=() captions=()
 for pair in "${pairs[@]}"; do
   IFS='|' read -r name source target <<< "$pair"
-  "$nec" transfer "$source" --to "$target" --model "$model" -o "$out/$name.bvh"
+  # shellcheck disable=SC2086  # NEC_TRANSFER_FLAGS is split into options on purpose
+  "$nec" transfer "$source" --to "$target" --model "$model" -o "$out/$name.bvh" ${NEC_TRANSFER_FLAGS:-}
   files+=("$source" "$out/$name.bvh")
   captions+=(--caption "source: $(basename "$source")" --caption "$name (skeleton of $(basename "$target"))")
 done

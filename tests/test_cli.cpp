@@ -16,6 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 
 using testing::CommandResult;
+using testing::contains;
 using testing::run_nec;
 
 class Cli : public ::testing::Test {
@@ -155,6 +156,18 @@ TEST_F(Cli, DemoWritesCacheBvhStripsAndPages) {
     ++bvh;
   }
   EXPECT_EQ(bvh, 4 * 5);  // normalized + four augmentations each
+  // One page links everything; with the default models (and word vectors) it shows their three uses too.
+  EXPECT_TRUE(contains(read_file(path("demo/index.html")), "clips.html"));
+  if (contains(run.output, "default models:")) {
+    for (const std::string page : {"transfers", "generated", "retrieved"}) {
+      EXPECT_TRUE(fs::exists(path("demo/models/" + page + ".html"))) << page;
+      EXPECT_TRUE(fs::exists(path("demo/models/" + page + ".png"))) << page;
+      EXPECT_TRUE(contains(read_file(path("demo/index.html")), "models/" + page + ".html")) << page;
+    }
+    for (int i = 1; i <= 3; ++i) EXPECT_NO_THROW(read_bvh(path("demo/models/generated_" + std::to_string(i) + ".bvh")));
+  } else {
+    EXPECT_TRUE(contains(run.output, "no default models")) << run.output;
+  }
 }
 
 }  // namespace

@@ -2,12 +2,14 @@
 // beside the cache, checkpoints, --resume), nec generate onto a skeleton the
 // models never saw (its names, channels and length; samples, seeds,
 // several captions), and the errors a user sees.
+#include "nec/gpt/checkpoint.h"
 #include "nec/motion/bvh.h"
 #include "nec/motion/files.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <torch/torch.h>
 
 #include <filesystem>
 #include <string>
@@ -82,6 +84,42 @@ TEST_F(CliGpt, TrainingStoresTheTokensOnceAndResumes) {
   // Into a finished checkpoint without --resume or --force: refused, nothing touched.
   const CommandResult again = run_nec(train_gpt(path("gpt")));
   EXPECT_EQ(again.exit_code, 1) << again.output;
+}
+
+// Two processes, each on its share of every batch, take the steps one process takes (without dropout or token
+// corruption, whose draws depend on the share's shape). Tolerances as in test_cli_distributed.cpp: float sums in
+// another order, turned into steps of up to the learning rate by Adam where a gradient is zero but for rounding.
+TEST_F(CliGpt, TwoProcessesTakeTheStepsOfOne) {
+  const std::string config = dir_.write("exact.json", R"({
+    "model": {"dim": 32, "layers": 2, "heads": 2, "feedforward": 64, "max_steps": 16, "dropout": 0.0,
+              "text": {"word_dim": 0, "dim": 16, "heads": 2, "feedforward": 32, "layers": 1, "max_pieces": 128,
+                       "output_dim": 16, "dropout": 0.0, "piece_dropout": 0.0}},
+    "optimizer": {"learning_rate": 0.003, "warmup_steps": 1},
+    "token_keep": 1.0, "batch_size": 8, "steps": 4, "log_every": 1, "validate_every": 0, "checkpoint_every": 0, "seed": 3})");
+  const std::string base = "train gpt --config " + config + " --data " + shared("cache") + " --tat " + shared("tat") +
+                           " --pieces " + shared("spm.model") + " --threads 1 --out ";
+  const CommandResult one = run_nec(base + path("one"));
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  const CommandResult two = run_nec(base + path("two") + " --nproc 2");
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  const auto loss = [](const std::string& output) {
+    const std::string line = testing::last_line_starting(output, "step 4/4");
+    return line.substr(line.find("loss"));
+  };
+  EXPECT_EQ(loss(one.output), loss(two.output));
+  gpt::LoadedGpt a = gpt::load_gpt_checkpoint(path("one")), b = gpt::load_gpt_checkpoint(path("two"));
+  const auto second = b.model->named_parameters();
+  double largest = 0, sum = 0;
+  int64_t count = 0;
+  for (const auto& item : a.model->named_parameters()) {
+    const at::Tensor gap = (item.value() - second[item.key()]).abs().to(torch::kDouble);
+    largest = std::max(largest, gap.max().item<double>());
+    sum += gap.sum().item<double>();
+    count += gap.numel();
+  }
+  std::printf("1 vs 2 processes, 4 steps: parameters differ by %.3g on average, %.3g at most\n", sum / count, largest);
+  EXPECT_LT(sum / count, 1e-6);
+  EXPECT_LT(largest, 0.1 * 0.003 * 4);
 }
 
 TEST_F(CliGpt, GeneratesOnASkeletonNoModelSaw) {

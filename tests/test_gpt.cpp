@@ -5,7 +5,9 @@
 // token sequence (and length) each caption means.
 #include "nec/gpt/model.h"
 #include "nec/gpt/sampling.h"
+#include "nec/gpt/token_set.h"
 #include "nec/gpt/training.h"
+#include "nec/motion/error.h"
 
 #include <gtest/gtest.h>
 #include <torch/torch.h>
@@ -191,6 +193,37 @@ TEST_F(GptTest, SamplesRepeatBySeedRowByRow) {
   for (const at::Tensor& codes : gpt::sample_codes(*model_, condition_, &none, codes_.narrow(1, 0, 2), open, options)) {
     EXPECT_GE(codes.size(0), open.min_steps);
     EXPECT_LE(codes.size(0), 9);
+  }
+}
+
+TEST(GptTokenSet, StoredTokensReadBackAndDamageIsFound) {
+  gpt::TokenSet set;
+  set.layers = 2;
+  set.codebook_size = 8;
+  set.cache_key = 11;
+  set.tokenizer_key = 22;
+  set.clips = {3, 7};
+  set.steps = {2, 1};
+  set.offsets = {0, 4};
+  set.codes = {1, 2, 3, 4, 7, 0};
+  const std::string bytes = gpt::serialize(set);
+  const gpt::TokenSet back = gpt::deserialize_token_set(bytes, "t.bin");
+  EXPECT_EQ(back.clips, set.clips);
+  EXPECT_EQ(back.steps, set.steps);
+  EXPECT_EQ(back.offsets, set.offsets);
+  EXPECT_EQ(back.codes, set.codes);
+  EXPECT_EQ(back.cache_key, 11u);
+  EXPECT_EQ(back.tokenizer_key, 22u);
+  EXPECT_EQ(back.codes_of(1)[1], 0);
+  EXPECT_THROW(gpt::deserialize_token_set(bytes.substr(0, bytes.size() - 1), "t.bin"), InputError);
+  EXPECT_THROW(gpt::deserialize_token_set(bytes + "x", "t.bin"), InputError);
+  std::string out_of_range = bytes;
+  out_of_range[out_of_range.size() - 4] = 9;  // the last code, beyond the codebook of 8
+  try {
+    gpt::deserialize_token_set(out_of_range, "t.bin");
+    ADD_FAILURE() << "a code out of range was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("t.bin: the token set is damaged"), std::string::npos) << e.what();
   }
 }
 

@@ -27,11 +27,6 @@ std::string token_set_path(const DatasetCache& cache, uint64_t tokenizer_key) {
 
 }  // namespace
 
-int TokenSet::row_of(int clip) const {
-  const auto it = std::lower_bound(clips.begin(), clips.end(), clip);
-  return it != clips.end() && *it == clip ? static_cast<int>(it - clips.begin()) : -1;
-}
-
 TokenSet build_token_set(tat::TokenizerSession& session, const DatasetCache& cache) {
   const tat::TatConfig& config = session.model.tokenizer->config();
   TokenSet set;

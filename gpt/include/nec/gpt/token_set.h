@@ -46,8 +46,6 @@ struct TokenSet {
 
   int size() const { return static_cast<int>(clips.size()); }
   const int32_t* codes_of(int row) const { return codes.data() + offsets.at(static_cast<size_t>(row)); }
-  // Row of `clip`, or -1 when it has no tokens.
-  int row_of(int clip) const;
 };
 
 // Encodes every clip of `cache` that has a caption (all splits).
