@@ -4,7 +4,7 @@
 # plan but the hexapod, kept out so the demo can show a plan the models never saw) and Debian's CMU
 # files. Not ../shared/data: its licenses are non-commercial.
 #   scripts/train_default_models.sh [WORK_DIR] [OUT_DIR]     # defaults: out/default-models, models/default
-# About 90 minutes on 2 cores. Writes OUT_DIR/{gpt,evaluator} (the GPT holds its tokenizer in gpt/tat,
+# 85 minutes on 2 cores here (the tokenizer and the evaluator, side by side, take most of it). Writes OUT_DIR/{gpt,evaluator} (the GPT holds its tokenizer in gpt/tat,
 # which holds its OwO encoder) without their training state, and OUT_DIR/README.md's numbers come from
 # the `nec eval` lines this script prints at the end.
 set -euo pipefail
