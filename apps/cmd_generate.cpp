@@ -102,6 +102,8 @@ int run_generate(int argc, char** argv) {
   if (!view.empty()) written.push_back(view);
   for (const std::string& path : written) {
     if (!cli.is_set("--force") && fs::exists(path)) throw InputError(path, 0, "exists; pass --force to overwrite it");
+    const fs::path folder = fs::path(path).parent_path();
+    if (!folder.empty() && !fs::is_directory(folder)) throw InputError(path, 0, "its folder does not exist");
   }
 
   use_torch_threads(threads_option(cli));

@@ -178,6 +178,9 @@ TEST_F(CliGpt, BadInputGetsOneLineAndNoOutput) {
   expect_refused(generate("\"a spider walks\" --skeleton " + spider() + " -o " + out + " --seconds 999"), "--seconds");
   expect_refused("generate \"a spider walks\" --skeleton " + spider() + " -o " + out + " --model " + shared("tat"),
                  "not a GPT checkpoint");
+  const CommandResult no_folder = run_nec(generate("\"a spider walks\" --skeleton " + spider() + " -o " + path("none/x.bvh")));
+  EXPECT_EQ(no_folder.exit_code, 1) << no_folder.output;
+  EXPECT_TRUE(contains(no_folder.output, "its folder does not exist")) << no_folder.output;
   // An existing output is not overwritten without --force.
   write_file_atomic(out, "mine");
   const CommandResult kept = run_nec(generate("\"a spider walks\" --skeleton " + spider() + " -o " + out));
