@@ -110,8 +110,24 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
     generated.push_back(viewer::load_view_clip(result));
     generated.back().captions = {caption};
   }
+  // Two captions in a row on the biped: the second segment goes on from the codes of the first, and the
+  // decoder reads across the seam at 3 s (docs/generation.md, Several captions).
+  const auto biped = std::find_if(clips_by_plan.begin(), clips_by_plan.end(),
+                                  [](const auto& clip) { return clip.first.find("_biped") != std::string::npos; });
+  if (biped != clips_by_plan.end()) {
+    const PreparedClip target = tat::prepare_for_model(biped->first, fps, UpAxis::Auto);
+    const int64_t steps = static_cast<int64_t>(3.0 * fps) / session.downsampling();
+    const std::vector<gpt::Segment> segments{{"a person walks forward", steps}, {"a person sits down", steps}};
+    const at::Tensor codes = gpt::generate_codes(session, target, segments, 1, sampling).front();
+    const std::string result = (models / "generated_two_captions.bvh").string();
+    tat::decode_onto(session.tokenizer, session.token_file(codes, segments[0].caption), biped->first, UpAxis::Auto, {},
+                     result);
+    generated.push_back(viewer::load_view_clip(result));
+    generated.back().captions = {"0-3 s: " + segments[0].caption, "3-6 s: " + segments[1].caption};
+  }
   if (!generated.empty()) {
-    write_page(models / "generated.html", "nec demo: generated from text, one body plan each", generated);
+    write_page(models / "generated.html", "nec demo: generated from text, one body plan each, and two captions in a row",
+               generated);
     pages.emplace_back("Generate: motion from a caption on each body plan", "models/generated");
   }
 

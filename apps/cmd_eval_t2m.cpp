@@ -17,7 +17,8 @@ int run_eval_t2m(int argc, char** argv) {
   CommandLine cli("nec eval t2m",
                   "Judge generated motion with a trained evaluator against the real motion of a cache split: for\n"
                   "each group (the first folder below --generated; its name picks the reference dataset) and for\n"
-                  "all: R-Precision@1/2/3 and MM-Dist of the motions against their captions, FID and Diversity\n"
+                  "all: R-Precision@1/2/3 and MM-Dist of the motions against their captions (mixed, and within\n"
+                  "body plan: the plan from a zoo folder name cNNN_<plan>, else the group), FID and Diversity\n"
                   "against the real clips, Multimodality (captions with several samples), Coverage and Novelty AUC\n"
                   "(Dragon appendix C; windows against the real clips that carry the same caption) and jitter.\n"
                   "Each BVH needs its caption in a sidecar CLIP.txt.");
@@ -25,7 +26,11 @@ int run_eval_t2m(int argc, char** argv) {
   cli.option("--reference", "CACHE", "", "dataset cache of real motion (from `nec prepare`)", true);
   cli.option("--evaluator", "EVAL", "", "evaluator checkpoint (from `nec train evaluator`, e.g. runs/eval/best)", true);
   cli.option("--split", "SPLIT", "test", "the reference split: train, val or test");
+  cli.option("--batch", "N", "32", "R-Precision batch size (a smaller group: its size; within plan: plans under N skipped)");
   cli.option("--window-stride", "N", "5", "frames between Coverage / Novelty window starts (the paper: 1)");
+  cli.flag("--across-creatures",
+           "Coverage / Novelty against the real clips whose caption matches with creature words masked (novel\n"
+           "compositions: 'a dragon leaps' against every other creature's leaps)");
   cli.option("--up", "AXIS", "auto", "up axis of the generated files: auto, y or z");
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
   cli.option("--json", "OUT.json", "", "also write every number as JSON");
@@ -34,8 +39,11 @@ int run_eval_t2m(int argc, char** argv) {
   const auto split = parse_split(cli.value("--split"));
   if (!split) throw UsageError("--split must be train, val or test, got '" + cli.value("--split") + "'");
   evaluator::T2mOptions options;
-  options.window_stride = static_cast<int>(cli.integer("--window-stride"));
+  options.window_stride = cli.integer("--window-stride");
   if (options.window_stride < 1) throw UsageError("--window-stride must be >= 1");
+  options.batch_size = cli.integer("--batch");
+  if (options.batch_size < 2) throw UsageError("--batch must be >= 2");
+  options.coverage_across_creatures = cli.is_set("--across-creatures");
   const auto start = std::chrono::steady_clock::now();
   const DatasetCache cache = read_cache(cli.value("--reference"));
   evaluator::EvaluatorSession session = evaluator::open_evaluator(cli.value("--evaluator"), cli.value("--glove"));

@@ -5,7 +5,8 @@
 # jitter), per dataset.
 #   scripts/eval_generation.sh GPT_CKPT CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES]
 # SPLIT: test (default) or val; SAMPLES per caption (default 1; 2 or more also give Multimodality).
-# Writes OUT_DIR/generated/<dataset>/*.bvh (+ caption sidecars), OUT_DIR/t2m.md and OUT_DIR/t2m.json.
+# Writes OUT_DIR/generated/<dataset>/<the source's folder>/*.bvh (+ caption sidecars; the zoo's folders
+# cNNN_<plan> give `nec eval t2m` the body plan), OUT_DIR/t2m.md and OUT_DIR/t2m.json.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 4 ]; then
@@ -27,9 +28,10 @@ PY
 count=0
 while IFS=$'\t' read -r dataset source seconds caption; do
   count=$((count + 1))
-  mkdir -p "$out/generated/$dataset"
+  folder="$out/generated/$dataset/$(basename "$(dirname "$source")")"
+  mkdir -p "$folder"
   "$nec" generate "$caption" --skeleton "$source" --model "$model" --seconds "$seconds" --samples "$samples" \
-    --seed "$count" -o "$out/generated/$dataset/$(printf %04d "$count").bvh" --force --threads 2 > /dev/null
+    --seed "$count" -o "$folder/$(printf %04d "$count").bvh" --force --threads 2 > /dev/null
 done < "$out/clips.tsv"
 echo "generated $count clips of the $split split in $((SECONDS - started)) s"
 "$nec" eval t2m --generated "$out/generated" --reference "$cache" --evaluator "$evaluator" --split "$split" \

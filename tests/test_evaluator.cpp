@@ -327,11 +327,14 @@ TEST_F(EvaluatorTest, RealClipsWrittenAsGeneratedOnesScoreLikeTheRealOnes) {
   trainer.save(dir / "eval", 0);
   evaluator::EvaluatorSession session(evaluator::load_evaluator_checkpoint(dir / "eval"),
                                       text::WordVectors::load(vectors_path()), torch::kCPU);
-  fs::create_directories(fs::path(dir / "generated") / "zoo");
+  // In zoo folders named after the body plan, as scripts/eval_generation.sh writes them.
   for (int clip = 0; clip < cache.clip_count(); ++clip) {
     const Clip real = cache.clip(clip);
+    const bool dog = cache.clips[static_cast<size_t>(clip)].captions[0].find("dog") != std::string::npos;
+    const fs::path folder = fs::path(dir / "generated") / "zoo" / (dog ? "c000_quadruped" : "c001_biped");
+    fs::create_directories(folder);
     for (const char* sample : {"a", "b"}) {
-      const fs::path file = fs::path(dir / "generated") / "zoo" / ("clip" + std::to_string(clip) + sample + ".bvh");
+      const fs::path file = folder / ("clip" + std::to_string(clip) + sample + ".bvh");
       write_bvh(file.string(), real.skeleton, real.motion);
       write_file_atomic(fs::path(file).replace_extension(".txt").string(), cache.clips[static_cast<size_t>(clip)].captions[0] + "\n");
     }
@@ -339,6 +342,8 @@ TEST_F(EvaluatorTest, RealClipsWrittenAsGeneratedOnesScoreLikeTheRealOnes) {
   const std::vector<evaluator::GeneratedClip> generated = evaluator::read_generated(dir / "generated", cache.fps, UpAxis::Auto);
   ASSERT_EQ(generated.size(), 2 * cache.clips.size());
   EXPECT_EQ(generated[0].group, "zoo");
+  EXPECT_EQ(generated[0].plan, "quadruped");
+  EXPECT_EQ(generated.back().plan, "biped");
   evaluator::T2mOptions options;
   options.window_stride = 10;
   const evaluator::T2mReport report = evaluator::evaluate_t2m(session, generated, cache, Split::Train, options);
@@ -349,6 +354,7 @@ TEST_F(EvaluatorTest, RealClipsWrittenAsGeneratedOnesScoreLikeTheRealOnes) {
   EXPECT_EQ(zoo.reference, 24);
   EXPECT_TRUE(zoo.has_precision);
   EXPECT_EQ(zoo.batch_size, 32);
+  EXPECT_FALSE(zoo.has_within_plan) << "each plan has 24 generated clips, under a batch of 32";
   EXPECT_LT(zoo.fid, 1e-3) << "FID of the real clips against themselves";
   EXPECT_NEAR(zoo.diversity, zoo.reference_diversity, 0.25 * zoo.reference_diversity);
   EXPECT_EQ(zoo.multimodality_captions, 6);
@@ -361,13 +367,27 @@ TEST_F(EvaluatorTest, RealClipsWrittenAsGeneratedOnesScoreLikeTheRealOnes) {
   const std::string table = evaluator::to_markdown(report);
   EXPECT_NE(table.find("| zoo | 48 / 24 |"), std::string::npos) << table;
 
+  // Batches of 16: one batch within each plan per repeat. Across creatures, a
+  // clip is compared with the walks (turns) of dogs and people alike: 8 real
+  // clips for walk and turn captions, 4 for trot and run; 8 generated clips of
+  // each of the 6 captions: 8 * (8 + 8 + 4 + 8 + 8 + 4) pairs.
+  options.batch_size = 16;
+  options.coverage_across_creatures = true;
+  const evaluator::T2mRow across = evaluator::evaluate_t2m(session, generated, cache, Split::Train, options).rows[0];
+  ASSERT_TRUE(across.has_within_plan);
+  EXPECT_EQ(across.within_plan.batches_per_repeat, 2);
+  EXPECT_TRUE(across.within_plan.skipped_groups.empty());
+  EXPECT_EQ(across.coverage_pairs, 320);
+  EXPECT_GT(across.coverage_auc, 0.0);
+
   // A generated file without its caption is refused by name.
-  fs::remove(fs::path(dir / "generated") / "zoo" / "clip0a.txt");
+  fs::remove(fs::path(generated[0].path).replace_extension(".txt"));
   try {
     evaluator::read_generated(dir / "generated", cache.fps, UpAxis::Auto);
     FAIL() << "read a generated clip without a caption";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("clip0a.bvh: has no caption"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(fs::path(generated[0].path).filename().string() + ": has no caption"),
+              std::string::npos) << e.what();
   }
 }
 

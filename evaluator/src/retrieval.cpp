@@ -49,13 +49,15 @@ std::string interval_text(const Interval& i) { return fmt::format("{:.3f} ± {:.
 
 }  // namespace
 
-std::string body_plan_of(const CacheClip& clip) {
+std::string body_plan_of_file(const std::string& path, const std::string& dataset) {
   static const std::regex zoo_folder("^c[0-9]+_([a-z]+)$");
   std::smatch match;
-  const std::string folder = std::filesystem::path(clip.source).parent_path().filename().string();
+  const std::string folder = std::filesystem::path(path).parent_path().filename().string();
   if (std::regex_match(folder, match, zoo_folder)) return match[1].str();
-  return clip.dataset;
+  return dataset;
 }
+
+std::string body_plan_of(const CacheClip& clip) { return body_plan_of_file(clip.source, clip.dataset); }
 
 const std::vector<std::string>& creature_words() {
   static const std::vector<std::string> words{

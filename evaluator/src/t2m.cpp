@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <tuple>
 
 namespace nec::evaluator {
 namespace {
@@ -74,6 +75,7 @@ std::vector<GeneratedClip> read_generated(const std::string& dir, double fps, Up
     clip.path = file;
     const fs::path relative = fs::relative(file, dir);
     clip.group = relative.has_parent_path() ? relative.begin()->string() : "";
+    clip.plan = body_plan_of_file(file, clip.group);
     CaptionSources sources;
     sources.bandai = false;
     clip.captions = captions_for(file, sources);
@@ -117,6 +119,23 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
     if (!generated[i].group.empty()) groups[generated[i].group].push_back(static_cast<int>(i));
     groups["all"].push_back(static_cast<int>(i));
   }
+  // Window embeddings of a clip at one window length, computed once: a reference clip meets many generated
+  // clips, and every clip comes back in the "all" row. Keys: (generated?, clip index, window frames).
+  std::map<std::tuple<bool, int, int>, Embeddings> windows;
+  const auto windows_of = [&](bool is_generated, int index, int window) -> const Embeddings& {
+    auto [it, added] = windows.try_emplace({is_generated, index, window});
+    if (!added) return it->second;
+    if (is_generated) {
+      const PreparedClip& prepared = generated[static_cast<size_t>(index)].prepared;
+      it->second = to_embeddings(session.embed_clip_windows(
+          prepared, window_starts(prepared.clip.motion.frame_count, window, options.window_stride), window));
+    } else {
+      it->second = to_embeddings(session.embed_windows(
+          cache, index, window_starts(cache.clips[static_cast<size_t>(index)].frame_count, window, options.window_stride),
+          window));
+    }
+    return it->second;
+  };
   std::vector<std::string> names;
   for (const auto& [name, rows] : groups) {
     if (name != "all") names.push_back(name);
@@ -145,6 +164,14 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
       row.batch_size = r.batch_size;
       row.precision = r_precision(rows_of(text, rows), g, r);
       row.has_precision = true;
+      std::vector<std::string> plans;
+      std::map<std::string, int> plan_sizes;
+      for (const int i : rows) plans.push_back(generated[static_cast<size_t>(i)].plan);
+      for (const std::string& plan : plans) ++plan_sizes[plan];
+      r.batch_size = options.batch_size;
+      row.has_within_plan = std::any_of(plan_sizes.begin(), plan_sizes.end(),
+                                        [&](const auto& plan) { return plan.second >= r.batch_size; });
+      if (row.has_within_plan) row.within_plan = r_precision_within_groups(rows_of(text, rows), g, plans, r);
       row.diversity = diversity(g, {options.diversity_pairs, options.seed});
     } else {
       row.diversity = kNan;
@@ -163,23 +190,24 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
     row.multimodality = samples.empty() ? kNan : multimodality(samples, {options.multimodality_pairs, options.seed});
 
     // Coverage and Novelty of each generated clip against the reference clips that carry its caption.
+    const auto comparable = [&](const std::string& caption) {
+      const std::string normalized = text::normalize_caption(caption);
+      return options.coverage_across_creatures ? mask_creature_words(normalized) : normalized;
+    };
     double coverage = 0, novelty = 0;
     for (const int i : rows) {
       const GeneratedClip& clip = generated[static_cast<size_t>(i)];
-      const std::string wanted = text::normalize_caption(clip.captions.front());
+      const std::string wanted = comparable(clip.captions.front());
       for (const int r : reference_rows) {
         const CacheClip& real = cache.clips[static_cast<size_t>(reference.clips[static_cast<size_t>(r)])];
         const bool same = std::any_of(real.captions.begin(), real.captions.end(),
-                                      [&](const std::string& c) { return text::normalize_caption(c) == wanted; });
+                                      [&](const std::string& c) { return comparable(c) == wanted; });
         if (!same) continue;
         const int window = std::min<int>(window_length(real.frame_count, clip.prepared.clip.motion.frame_count,
                                                        options.max_window),
                                          static_cast<int>(session.loaded().model->config().motion.max_frames()));
-        const Embeddings real_windows = to_embeddings(session.embed_windows(
-            cache, reference.clips[static_cast<size_t>(r)], window_starts(real.frame_count, window, options.window_stride), window));
-        const Embeddings generated_windows = to_embeddings(session.embed_clip_windows(
-            clip.prepared, window_starts(clip.prepared.clip.motion.frame_count, window, options.window_stride), window));
-        const CoverageNovelty cn = coverage_novelty(real_windows, generated_windows);
+        const CoverageNovelty cn =
+            coverage_novelty(windows_of(false, reference.clips[static_cast<size_t>(r)], window), windows_of(true, i, window));
         coverage += cn.coverage_auc;
         novelty += cn.novelty_auc;
         ++row.coverage_pairs;
@@ -197,19 +225,20 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
 
 std::string to_markdown(const T2mReport& report) {
   std::string out = fmt::format(
-      "| group | generated / {} clips | R@1 / R@2 / R@3 (batch) | MM-Dist | FID | Diversity (real) | Multimodality "
-      "(captions) | Coverage AUC | Novelty AUC | jitter (real) |\n|---|---|---|---|---|---|---|---|---|---|\n",
+      "| group | generated / {} clips | R@1 / R@2 / R@3 (batch) | within plan R@3 | MM-Dist | FID | Diversity (real) | "
+      "Multimodality (captions) | Coverage AUC | Novelty AUC | jitter (real) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
       report.split);
   for (const T2mRow& row : report.rows) {
-    std::string precision = "—", mm_dist = "—";
+    std::string precision = "—", mm_dist = "—", within_plan = "—";
     if (row.has_precision) {
       precision.clear();
       for (const Interval& i : row.precision.top_k) precision += (precision.empty() ? "" : " / ") + fmt::format("{:.3f}", i.mean);
       precision += fmt::format(" ({})", row.batch_size);
       mm_dist = number(row.precision.mm_dist.mean);
     }
-    out += fmt::format("| {} | {} / {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} ({}) |\n", row.name, row.generated,
-                       row.reference, precision, mm_dist, number(row.fid), number(row.diversity),
+    if (row.has_within_plan) within_plan = number(row.within_plan.top_k.back().mean);
+    out += fmt::format("| {} | {} / {} | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} ({}) |\n", row.name,
+                       row.generated, row.reference, precision, within_plan, mm_dist, number(row.fid), number(row.diversity),
                        number(row.reference_diversity), number(row.multimodality), row.multimodality_captions,
                        number(row.coverage_auc), number(row.novelty_auc), number(row.jitter, "{:.1f}"),
                        number(row.reference_jitter, "{:.1f}"));
@@ -237,6 +266,7 @@ nlohmann::json to_json(const T2mReport& report) {
       r["precision"] = to_json(row.precision);
       r["batch_size"] = row.batch_size;
     }
+    if (row.has_within_plan) r["within_plan"] = to_json(row.within_plan);
     rows.push_back(std::move(r));
   }
   return {{"split", report.split}, {"rows", rows}};

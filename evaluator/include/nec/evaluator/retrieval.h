@@ -25,8 +25,10 @@
 
 namespace nec::evaluator {
 
-// The body plan of a clip: the zoo's folder name `cNNN_<plan>` gives the
-// plan ("quadruped", "spider"); any other clip's plan is its dataset.
+// The body plan of a file: the zoo's folder name `cNNN_<plan>` gives the
+// plan ("quadruped", "spider"); any other file's plan is `dataset`.
+std::string body_plan_of_file(const std::string& path, const std::string& dataset);
+// body_plan_of_file of the clip's source and dataset.
 std::string body_plan_of(const CacheClip& clip);
 
 // The creature nouns captions use (the zoo's species and plans, "person", "someone", ...).

@@ -11,7 +11,10 @@
 // caption are samples of it (Multimodality). A clip's group is the first
 // folder below the root ("zoo/a.bvh" -> "zoo"), and is compared with the
 // reference clips of the dataset of that name (all reference clips when no
-// dataset has it). Files straight in the root belong to "all" only.
+// dataset has it). Files straight in the root belong to "all" only. A clip's
+// body plan, for R-Precision within plan, is read from its folder as a cache
+// clip's is (body_plan_of_file: "zoo/c003_spider/a.bvh" -> "spider"), else
+// it is its group.
 #pragma once
 
 #include "nec/evaluator/evaluator.h"
@@ -29,6 +32,7 @@ namespace nec::evaluator {
 struct GeneratedClip {
   std::string path;
   std::string group;                  // first folder below the root, "" for files in the root
+  std::string plan;                   // body_plan_of_file(path, group)
   std::vector<std::string> captions;  // from captions_for (sidecar); the first is the one judged
   PreparedClip prepared;              // preprocessed at the reference fps
 };
@@ -45,6 +49,10 @@ struct T2mOptions {
   int multimodality_pairs = 10;  // per caption with at least 2 samples
   int max_window = 90;           // Coverage / Novelty window F (Dragon: 90 frames)
   int window_stride = 5;         // frames between window starts (Dragon: 1)
+  // Coverage / Novelty against the reference clips whose caption is the same
+  // once creature words are masked ("a dragon leaps" against every creature's
+  // "a ... leaps"): novel compositions, an action the plan never did.
+  bool coverage_across_creatures = false;
   uint64_t seed = 0;
 
   // Throws std::invalid_argument naming the bad field.
@@ -60,6 +68,8 @@ struct T2mRow {
   int batch_size = 0;               // R-Precision batch used (chance R@k = k / batch_size)
   RPrecision precision;             // generated motions against their captions
   bool has_precision = false;
+  RPrecision within_plan;           // the same in batches of one body plan (plans under batch_size skipped)
+  bool has_within_plan = false;
   double fid = 0;                   // generated vs reference embeddings
   double diversity = 0, reference_diversity = 0;
   double multimodality = 0;
