@@ -163,6 +163,28 @@ TEST_F(CliGpt, GeneratesOnASkeletonNoModelSaw) {
   EXPECT_LE(frames, 15 * 4);
 }
 
+// The baselines' tokens carry a GPT too (the evaluation compares the three): NEC-VQ has one code per step, the
+// zero-padding baseline reads no OwO embeddings, yet the GPT's skeleton features still come from its OwO.
+TEST_F(CliGpt, TheBaselineTokenizersCarryAGpt) {
+  const testing::TempDir& d = shared_folder();
+  for (const std::string kind : {"nec-vq", "zero-pad-rvq"}) {
+    const CommandResult tat = run_nec("train tat --config " + d / "tat.json" + " --kind " + kind + " --data " +
+                                      d / "cache" + " --owo " + d / "owo" + " --out " + path(kind) + " --steps 2 --threads 1");
+    ASSERT_EQ(tat.exit_code, 0) << kind << "\n" << tat.output;
+    const CommandResult gpt = run_nec("train gpt --config " + d / "gpt.json" + " --data " + d / "cache" + " --tat " +
+                                      path(kind) + " --pieces " + d / "spm.model" + " --out " + path("gpt-" + kind) +
+                                      " --steps 2 --threads 1");
+    ASSERT_EQ(gpt.exit_code, 0) << kind << "\n" << gpt.output;
+    const nlohmann::json config = nlohmann::json::parse(read_file(path("gpt-" + kind + "/config.json")));
+    EXPECT_EQ(config["gpt"]["codebook_layers"], kind == "nec-vq" ? 1 : 2) << kind;
+    const std::string out = path(kind + ".bvh");
+    const CommandResult made = run_nec("generate \"a spider walks forward\" --skeleton " + spider() + " -o " + out +
+                                       " --seconds 1 --model " + path("gpt-" + kind) + " --threads 1");
+    ASSERT_EQ(made.exit_code, 0) << kind << "\n" << made.output;
+    EXPECT_EQ(read_bvh(out).motion.frame_count, 32) << kind;
+  }
+}
+
 TEST_F(CliGpt, BadInputGetsOneLineAndNoOutput) {
   const std::string out = path("out.bvh");
   const auto expect_refused = [&](const std::string& arguments, const std::string& message) {

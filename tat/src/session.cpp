@@ -31,7 +31,8 @@ TokenizerSession open_tokenizer_session(const std::string& model_dir, const std:
   TokenizerSession session;
   session.model = load_tat_checkpoint(model_dir);
   const int64_t name_dim = session.model.owo->encoder->config().name_dim;
-  if (name_dim > 0 && session.model.tokenizer->config().kind != TokenizerKind::ZeroPadRvq) {
+  // Also for the zero-padding baseline, whose tokens do not read the OwO: the GPT's skeleton features do.
+  if (name_dim > 0) {
     session.vectors.emplace(text::WordVectors::load_checked(glove, name_dim));
   }
   session.windows.window_frames = session.model.info.window_frames;
