@@ -117,7 +117,7 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
   if (biped != clips_by_plan.end()) {
     const PreparedClip target = tat::prepare_for_model(biped->first, fps, UpAxis::Auto);
     const int64_t steps = static_cast<int64_t>(3.0 * fps) / session.downsampling();
-    const std::vector<gpt::Segment> segments{{"a person walks forward", steps}, {"a person sits down", steps}};
+    const std::vector<gpt::Segment> segments{{"a person walks forward", steps}, {"a person turns to the left", steps}};
     const at::Tensor codes = gpt::generate_codes(session, target, segments, 1, sampling).front();
     const std::string result = (models / "generated_two_captions.bvh").string();
     tat::decode_onto(session.tokenizer, session.token_file(codes, segments[0].caption), biped->first, UpAxis::Auto, {},

@@ -167,7 +167,7 @@ TEST_F(Cli, DemoWritesCacheBvhStripsAndPages) {
     for (int i = 1; i <= 3; ++i) EXPECT_NO_THROW(read_bvh(path("demo/models/generated_" + std::to_string(i) + ".bvh")));
     // Two captions of 3 s each (22 token steps of 4 frames at 30 fps) make one motion of both.
     EXPECT_EQ(read_bvh(path("demo/models/generated_two_captions.bvh")).motion.frame_count, 2 * 22 * 4);
-    EXPECT_TRUE(contains(read_file(path("demo/models/generated.html")), "3-6 s: a person sits down"));
+    EXPECT_TRUE(contains(read_file(path("demo/models/generated.html")), "3-6 s: a person turns to the left"));
   } else {
     EXPECT_TRUE(contains(run.output, "no default models")) << run.output;
   }
