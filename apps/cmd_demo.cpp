@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "model_options.h"
 
+#include "nec/evaluator/retrieval.h"
 #include "nec/evaluator/retrieval_index.h"
 #include "nec/gpt/generation.h"
 #include "nec/motion/augment.h"
@@ -113,7 +114,7 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
   // Two captions in a row on the biped: the second segment goes on from the codes of the first, and the
   // decoder reads across the seam at 3 s (docs/generation.md, Several captions).
   const auto biped = std::find_if(clips_by_plan.begin(), clips_by_plan.end(),
-                                  [](const auto& clip) { return clip.first.find("_biped") != std::string::npos; });
+                                  [](const auto& clip) { return evaluator::body_plan_of_file(clip.first, "") == "biped"; });
   if (biped != clips_by_plan.end()) {
     const PreparedClip target = tat::prepare_for_model(biped->first, fps, UpAxis::Auto);
     const int64_t steps = static_cast<int64_t>(3.0 * fps) / session.downsampling();

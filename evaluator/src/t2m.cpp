@@ -119,6 +119,18 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
     if (!generated[i].group.empty()) groups[generated[i].group].push_back(static_cast<int>(i));
     groups["all"].push_back(static_cast<int>(i));
   }
+  // Captions as Coverage / Novelty matches them, once per clip (not per generated x reference pair).
+  const auto caption_key = [&](const std::string& caption) {
+    const std::string normalized = text::normalize_caption(caption);
+    return options.coverage_across_creatures ? mask_creature_words(normalized) : normalized;
+  };
+  std::vector<std::string> generated_caption_keys;
+  for (const GeneratedClip& clip : generated) generated_caption_keys.push_back(caption_key(clip.captions.front()));
+  std::vector<std::vector<std::string>> reference_caption_keys;
+  for (const int clip : reference.clips) {
+    std::vector<std::string>& keys = reference_caption_keys.emplace_back();
+    for (const std::string& caption : cache.clips[static_cast<size_t>(clip)].captions) keys.push_back(caption_key(caption));
+  }
   // Window embeddings of a clip at one window length, computed once: a reference clip meets many generated
   // clips, and every clip comes back in the "all" row. Keys: (generated?, clip index, window frames).
   std::map<std::tuple<bool, int, int>, Embeddings> windows;
@@ -164,10 +176,10 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
       row.batch_size = r.batch_size;
       row.precision = r_precision(rows_of(text, rows), g, r);
       row.has_precision = true;
+      // Within plan: r_precision_within_groups needs one plan with a full batch.
       std::vector<std::string> plans;
       std::map<std::string, int> plan_sizes;
-      for (const int i : rows) plans.push_back(generated[static_cast<size_t>(i)].plan);
-      for (const std::string& plan : plans) ++plan_sizes[plan];
+      for (const int i : rows) ++plan_sizes[plans.emplace_back(generated[static_cast<size_t>(i)].plan)];
       r.batch_size = options.batch_size;
       row.has_within_plan = std::any_of(plan_sizes.begin(), plan_sizes.end(),
                                         [&](const auto& plan) { return plan.second >= r.batch_size; });
@@ -190,18 +202,14 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
     row.multimodality = samples.empty() ? kNan : multimodality(samples, {options.multimodality_pairs, options.seed});
 
     // Coverage and Novelty of each generated clip against the reference clips that carry its caption.
-    const auto comparable = [&](const std::string& caption) {
-      const std::string normalized = text::normalize_caption(caption);
-      return options.coverage_across_creatures ? mask_creature_words(normalized) : normalized;
-    };
     double coverage = 0, novelty = 0;
     for (const int i : rows) {
       const GeneratedClip& clip = generated[static_cast<size_t>(i)];
-      const std::string wanted = comparable(clip.captions.front());
+      const std::string& wanted = generated_caption_keys[static_cast<size_t>(i)];
       for (const int r : reference_rows) {
         const CacheClip& real = cache.clips[static_cast<size_t>(reference.clips[static_cast<size_t>(r)])];
-        const bool same = std::any_of(real.captions.begin(), real.captions.end(),
-                                      [&](const std::string& c) { return comparable(c) == wanted; });
+        const std::vector<std::string>& keys = reference_caption_keys[static_cast<size_t>(r)];
+        const bool same = std::find(keys.begin(), keys.end(), wanted) != keys.end();
         if (!same) continue;
         const int window = std::min<int>(window_length(real.frame_count, clip.prepared.clip.motion.frame_count,
                                                        options.max_window),
