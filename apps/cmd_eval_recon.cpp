@@ -21,6 +21,7 @@ namespace {
 struct GroupResult {
   tat::ReconstructionMetrics normalized;  // skeleton-diameter units
   tat::ReconstructionMetrics file_units;  // the source files' own units
+  tat::HeightRangeKept height;            // clips that go up or down
   int clips = 0;
   int skipped = 0;  // clips the model cannot represent (baseline: more joints than max_joints)
 };
@@ -55,7 +56,9 @@ nlohmann::json metrics_json(const GroupResult& g) {
           {"mpjpe_no_translation", g.normalized.mpjpe_no_translation()},
           {"mpjpe_file_units", g.file_units.mpjpe()},
           {"mpjpe_no_translation_file_units", g.file_units.mpjpe_no_translation()},
-          {"geodesic_degrees", g.normalized.geodesic_degrees()}};
+          {"geodesic_degrees", g.normalized.geodesic_degrees()},
+          {"vertical_clips", g.height.ratios.size()},
+          {"height_range_kept", g.height.median()}};
 }
 
 }  // namespace
@@ -64,7 +67,9 @@ int run_eval_recon(int argc, char** argv) {
   CommandLine cli("nec eval recon",
                   "Reconstruction accuracy on the clips of a split (default: test, never trained on), per dataset:\n"
                   "MPJPE with and without the root trajectory (in skeleton diameters and in the files' units) and\n"
-                  "GeoDist (degrees between decoded and true joint rotations). Several models give one table.");
+                  "GeoDist (degrees between decoded and true joint rotations), and the height range kept (the\n"
+                  "root's highest minus lowest height, decoded / real, median over the clips whose root moves up\n"
+                  "or down by 0.05 diameters or more: jumps, sits). Several models give one table.");
   cli.option("--data", "CACHE", "", "dataset cache (from `nec prepare`)", true);
   cli.option("--models", "CKPTS", "", "comma-separated tokenizer checkpoints (from `nec train tat`)", true);
   cli.option("--split", "SPLIT", "test", "train, val or test");
@@ -92,8 +97,9 @@ int run_eval_recon(int argc, char** argv) {
 
   nlohmann::json results = nlohmann::json::array();
   std::string table =
-      "| dataset | model | tokens/s | clips | MPJPE | MPJPE no trans. | MPJPE (file units) | GeoDist (deg) |\n"
-      "|---|---|---|---|---|---|---|---|\n";
+      "| dataset | model | tokens/s | clips | MPJPE | MPJPE no trans. | MPJPE (file units) | GeoDist (deg) | height "
+      "range kept (clips) |\n"
+      "|---|---|---|---|---|---|---|---|---|\n";
   for (const std::string& path : cli.list("--models")) {
     TokenizerOptions options = tokenizer_options(cli);
     options.model = path;
@@ -124,6 +130,7 @@ int run_eval_recon(int argc, char** argv) {
         group.normalized.add(d.features, t.features, t.parents, t.offsets, t.joint_mask, t.frame_mask);
         group.file_units.add(d.features, t.features, t.parents, t.offsets, t.joint_mask, t.frame_mask,
                              clip.normalization.scale);
+        group.height.add(decoded, truth);
         ++group.clips;
       }
       nlohmann::json row = metrics_json(group);
@@ -135,13 +142,15 @@ int run_eval_recon(int argc, char** argv) {
       results.push_back(row);
       const std::string skipped = group.skipped ? fmt::format(" (+{} skipped: J > {})", group.skipped, config.max_joints) : "";
       if (group.clips == 0) {
-        table += fmt::format("| {} | {} | {:.0f} | 0{} | - | - | - | - |\n", dataset, tat::to_string(config.kind),
+        table += fmt::format("| {} | {} | {:.0f} | 0{} | - | - | - | - | - |\n", dataset, tat::to_string(config.kind),
                              tokens_per_second, skipped);
       } else {
-        table += fmt::format("| {} | {} | {:.0f} | {}{} | {:.4f} | {:.4f} | {:.4g} | {:.2f} |\n", dataset,
+        const std::string height =
+            group.height.ratios.empty() ? "- (0)" : fmt::format("{:.2f} ({})", group.height.median(), group.height.ratios.size());
+        table += fmt::format("| {} | {} | {:.0f} | {}{} | {:.4f} | {:.4f} | {:.4g} | {:.2f} | {} |\n", dataset,
                              tat::to_string(config.kind), tokens_per_second, group.clips, skipped,
                              group.normalized.mpjpe(), group.normalized.mpjpe_no_translation(),
-                             group.file_units.mpjpe(), group.normalized.geodesic_degrees());
+                             group.file_units.mpjpe(), group.normalized.geodesic_degrees(), height);
       }
     }
   }

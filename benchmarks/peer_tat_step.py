@@ -73,7 +73,7 @@ def read_config(configs):
         "dead_code_threshold": quantizer.get("dead_code_threshold", 1.0),
         "quantize_dropout": quantizer.get("quantize_dropout", 0.2),
         "loss": {k: loss.get(k, d) for k, d in (("rotation", 1.0), ("root", 1.0), ("position", 1.0),
-                                                ("velocity", 0.5))},
+                                                ("velocity", 0.5), ("vertical", 4.0))},
         "learning_rate": optimizer.get("learning_rate", 2e-4),
         "final_lr_fraction": optimizer.get("final_lr_fraction", 0.1),
         "warmup_steps": optimizer.get("warmup_steps", 200),
@@ -184,6 +184,12 @@ def key_bias(joint_mask):
     return bias.view(keep.size(0), 1, 1, 1, keep.size(1))
 
 
+def root_rise(model):
+    """(B, T, N, MODEL_CHANNELS), joint 0 the root -> (B, T, 1, 1): y_t - y_(t-1) scaled as the path, frame 0's 0."""
+    height = model[:, :, :1, 1:2]
+    return F.pad(height[:, 1:] - height[:, :-1], (0, 0, 0, 0, 1, 0)) * ROOT_MOTION_SCALE
+
+
 def decoder_attention_bias(joint_mask):
     """(B, J) bool -> (B, 1, 1, 1 + J, 1 + J): the joints read every real token, the virtual joint only itself."""
     n = joint_mask.size(1) + 1
@@ -198,6 +204,7 @@ class NecEncoder(nn.Module):
         d = c["dim"]
         self.input = nn.Sequential(nn.Linear(MODEL_CHANNELS, d), nn.ReLU(), nn.Linear(d, d))  # built in this order, as tokenizer.cpp
         self.embedding = nn.Linear(c["joint_embedding_dim"], d)
+        self.rise = nn.Linear(1, d)
         self.virtual_joint = nn.Parameter(torch.randn(d) * 0.02)
         self.temporal = nn.ModuleList()
         self.spatial = nn.ModuleList()
@@ -213,8 +220,8 @@ class NecEncoder(nn.Module):
         """Model space (B, T, J, MODEL_CHANNELS) -> latent (B, T / r, C)."""
         b, t = features.shape[:2]
         joints = self.input(features) + self.embedding(joint_embeddings).unsqueeze(1)
-        # The virtual joint starts as the learnt vector plus the root joint's input.
-        virtual_joint = self.virtual_joint.view(1, 1, 1, -1) + joints[:, :, :1]
+        # The virtual joint starts as the learnt vector plus the root joint's input and its rise per frame.
+        virtual_joint = self.virtual_joint.view(1, 1, 1, -1) + joints[:, :, :1] + self.rise(root_rise(features))
         tokens = torch.cat([virtual_joint, joints], 2)
         bias = key_bias(joint_mask)
         blocks = len(self.temporal)
@@ -242,7 +249,7 @@ class NecDecoder(nn.Module):
             self.temporal.append(UpBlock(d))
         self.attention_layers = c["attention_layers"]
         self.output = nn.Linear(d, MODEL_CHANNELS)
-        self.path = nn.Linear(d, 3)
+        self.path = nn.Linear(d, 4)
 
     def forward(self, quantized, joint_mask, joint_embeddings):
         """(B, S, C) -> model space (B, S r, J, MODEL_CHANNELS), zero at padded joints."""
@@ -257,10 +264,13 @@ class NecDecoder(nn.Module):
                 tokens = self.spatial[block * self.attention_layers + layer](tokens, bias)
             tokens = per_token(self.temporal[block], tokens)
         out = self.output(tokens.narrow(2, 1, joints)) + rest_pose_features()
-        # The root's path (Δx', Δz', yaw rate) from the virtual joint; height and R̃ stay the root joint's.
+        # The root's path (Δx', Δz', yaw rate, rise) from the virtual joint; R̃ and the height's level stay the
+        # root joint's: height = the level averaged over the window + the summed rise, centred.
         path = self.path(tokens.select(2, 0))
         root = out.select(2, 0)
-        root = torch.cat([path.narrow(-1, 0, 1), root.narrow(-1, 1, 1), path.narrow(-1, 1, 1), root.narrow(-1, 3, 6),
+        shape = F.pad((path[:, 1:, 3:4] / ROOT_MOTION_SCALE).cumsum(1), (0, 0, 1, 0))
+        height = root[..., 1:2].mean(1, keepdim=True) + shape - shape.mean(1, keepdim=True)
+        root = torch.cat([path.narrow(-1, 0, 1), height, path.narrow(-1, 1, 1), root.narrow(-1, 3, 6),
                           path.narrow(-1, 2, 1)], -1)
         joined = torch.cat([root.unsqueeze(2), out.narrow(2, 1, joints - 1)], 2)
         return joined * joint_mask.view(joint_mask.size(0), 1, joints, 1).to(joined.dtype)
@@ -540,10 +550,12 @@ def reconstruction_loss(prediction, x, commitment, w):
     position = masked_l1(predicted, expected, real)
     both = real[:, 1:] * real[:, :-1]
     velocity = masked_l1(predicted[:, 1:] - predicted[:, :-1], expected[:, 1:] - expected[:, :-1], both)
+    rise = [f[:, 1:, 0, 1:2] * ROOT_MOTION_SCALE for f in (prediction, target)]
+    vertical = masked_l1(rise[0], rise[1], frame[:, 1:] * frame[:, :-1])
     commitment = commitment.to(prediction.dtype).reshape(())
     total = w["rotation"] * rotation + w["root"] * root + w["position"] * position + \
-        w["velocity"] * velocity + commitment
-    terms = torch.stack([rotation, root, position, velocity, commitment]).detach().to("cpu", torch.float64)
+        w["velocity"] * velocity + w["vertical"] * vertical + commitment
+    terms = torch.stack([rotation, root, position, velocity, vertical, commitment]).detach().to("cpu", torch.float64)
     return total, terms.tolist()
 
 

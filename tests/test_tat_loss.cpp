@@ -77,6 +77,7 @@ TEST(TatLoss, ZeroAtTheTarget) {
   EXPECT_EQ(l.root, 0.0);
   EXPECT_EQ(l.position, 0.0);
   EXPECT_EQ(l.velocity, 0.0);
+  EXPECT_EQ(l.vertical, 0.0);
   EXPECT_EQ(l.commitment, 0.0);
   // The commitment loss is added as it is.
   const ReconstructionLoss with_commitment = loss_of(f.batch.features.clone(), f.batch, 0.125);
@@ -98,6 +99,7 @@ TEST(TatLoss, EachTermRespondsToItsOwnChannels) {
   EXPECT_EQ(l.root, 0.0);
   EXPECT_GT(l.position, 0.0);
   EXPECT_GT(l.velocity, 0.0);
+  EXPECT_EQ(l.vertical, 0.0);
 
   // A leaf's rotation moves no joint position.
   p = f.batch.features.clone();
@@ -120,7 +122,16 @@ TEST(TatLoss, EachTermRespondsToItsOwnChannels) {
   // lifts the root's height in frames 5 to 11 of clip 0:
   p = f.batch.features.clone();
   p[0][frame][0][1].add_(0.2);
-  EXPECT_NEAR(loss_of(p, f.batch).root, 0.2 * 7.0 / 4.0 / 21.0, 1e-6);
+  l = loss_of(p, f.batch);
+  EXPECT_NEAR(l.root, 0.2 * 7.0 / 4.0 / 21.0, 1e-6);
+  // ... and is one rise per frame, at the path's scale, over the 11 + 8 pairs of real frames.
+  EXPECT_NEAR(l.vertical, 0.2 * tat::kRootMotionScale / 19.0, 1e-6);
+  // Frame 0's Δy is the start height, not a rise.
+  p = f.batch.features.clone();
+  p[0][0][0][1].add_(0.2);
+  l = loss_of(p, f.batch);
+  EXPECT_GT(l.root, 0.0);
+  EXPECT_EQ(l.vertical, 0.0);
   // Horizontal Δ counts at the networks' scale, turned into the body's frame (its length kept).
   p = f.batch.features.clone();
   p[0][frame][0][0].add_(0.2);
@@ -179,8 +190,11 @@ TEST(TatLoss, WeightsScaleTheirTerms) {
   w.root = 0.0;
   w.position = 3.0;
   w.velocity = 0.25;
+  w.vertical = 1.5;
   const ReconstructionLoss l = tat::reconstruction_loss(p, f.batch, torch::full({}, 0.5), w);
-  EXPECT_NEAR(l.total.item<double>(), 2.0 * l.rotation + 3.0 * l.position + 0.25 * l.velocity + 0.5, 1e-5);
+  EXPECT_GT(l.vertical, 0.0);
+  EXPECT_NEAR(l.total.item<double>(),
+              2.0 * l.rotation + 3.0 * l.position + 0.25 * l.velocity + 1.5 * l.vertical + 0.5, 1e-5);
   EXPECT_THROW(tat::reconstruction_loss(p.narrow(1, 0, 4), f.batch, {}, w), std::invalid_argument);
 }
 

@@ -71,6 +71,17 @@ double root_heading(const Features& f, int frame) {
   return std::remainder(heading_angle(Quat(root_rotation(f, frame))), 2.0 * M_PI);
 }
 
+std::vector<double> root_heights(const Features& f, int frame_count) {
+  if (frame_count < 0 || frame_count > f.frame_count || (frame_count > 0 && f.joint_count == 0)) {
+    throw std::out_of_range("root_heights: " + std::to_string(frame_count) + " frames of a clip of " +
+                            std::to_string(f.frame_count) + " frames and " + std::to_string(f.joint_count) + " joints");
+  }
+  std::vector<double> heights(frame_count);
+  double height = 0.0;
+  for (int t = 0; t < frame_count; ++t) heights[t] = height += f.at(t, 0, 1);
+  return heights;
+}
+
 namespace {
 
 // Premultiplies every root orientation by `turn`; with keep_path, turns every displacement back by it.

@@ -2,6 +2,7 @@
 #include "nec/motion/foot_lock.h"
 
 #include "nec/motion/kinematics.h"
+#include "nec/motion/statistics.h"
 
 #include <algorithm>
 #include <cmath>
@@ -36,14 +37,6 @@ Leg leg_above(const Skeleton& skeleton, const std::vector<std::vector<int>>& chi
   leg.hip = chain.back();
   if (chain.size() > 1) leg.knee = chain[(chain.size() - 1) / 2];
   return leg;
-}
-
-double median(std::vector<double> values) {
-  const size_t half = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + half, values.end());
-  const double upper = values[half];
-  if (values.size() % 2 == 1) return upper;
-  return 0.5 * (upper + *std::max_element(values.begin(), values.begin() + half));
 }
 
 struct Plant {

@@ -1,4 +1,4 @@
-// Masked reconstruction loss of the tokenizer: rot6D, root displacement, FK
+// Masked reconstruction loss of the tokenizer: rot6D, root displacement, the root's vertical velocity, FK
 // positions and velocities, plus the quantizer's commitment loss.
 #include "nec/tat/loss.h"
 
@@ -33,6 +33,7 @@ void visit_fields(train::ConfigVisitor& v, LossWeights& c) {
   v.field("root", c.root, "weight of the L1 on the root's motion");
   v.field("position", c.position, "weight of the L1 on world joint positions");
   v.field("velocity", c.velocity, "weight of the L1 on joint velocities");
+  v.field("vertical", c.vertical, "weight of the L1 on the root's vertical velocity");
 }
 
 void LossWeights::validate() const {
@@ -40,6 +41,7 @@ void LossWeights::validate() const {
   require_weight(root, "root");
   require_weight(position, "position");
   require_weight(velocity, "velocity");
+  require_weight(vertical, "vertical");
 }
 
 ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const BatchTensors& target,
@@ -61,6 +63,14 @@ ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const Batch
     return torch::cat({root.narrow(-1, 0, 3), root.narrow(-1, 9, 1)}, -1);
   };
   const at::Tensor root = masked_l1(root_motion(prediction), root_motion(target.features), frame);
+  // Θ's Δy of frames 1.. is the root's rise per frame (frame 0 holds the height).
+  at::Tensor vertical = torch::zeros({}, prediction.options());
+  if (t > 1) {
+    const auto rise = [t](const at::Tensor& features) {
+      return features.select(2, 0).narrow(-1, 1, 1).narrow(1, 1, t - 1) * kRootMotionScale;  // (B, T - 1, 1)
+    };
+    vertical = masked_l1(rise(prediction), rise(target.features), frame.narrow(1, 1, t - 1) * frame.narrow(1, 0, t - 1));
+  }
 
   const at::Tensor predicted_positions = features_to_positions(prediction, target.parents, target.offsets).positions;
   at::Tensor target_positions;
@@ -85,16 +95,17 @@ ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const Batch
 
   ReconstructionLoss out;
   out.total = weights.rotation * rotation + weights.root * root + weights.position * position +
-              weights.velocity * velocity + commitment;
-  // All five terms in one copy to the CPU (one device sync).
-  const at::Tensor terms = torch::stack({rotation, root, position, velocity, commitment}).detach().to(
+              weights.velocity * velocity + weights.vertical * vertical + commitment;
+  // All six terms in one copy to the CPU (one device sync).
+  const at::Tensor terms = torch::stack({rotation, root, position, velocity, vertical, commitment}).detach().to(
       torch::kCPU, torch::kDouble);
   const double* values = terms.data_ptr<double>();
   out.rotation = values[0];
   out.root = values[1];
   out.position = values[2];
   out.velocity = values[3];
-  out.commitment = values[4];
+  out.vertical = values[4];
+  out.commitment = values[5];
   return out;
 }
 

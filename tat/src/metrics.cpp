@@ -1,10 +1,12 @@
 // MPJPE and GeoDist on masked batches.
 #include "nec/tat/metrics.h"
 
+#include "nec/motion/statistics.h"
 #include "nec/tat/fk.h"
 
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace nec::tat {
@@ -38,5 +40,23 @@ void ReconstructionMetrics::add(const ReconstructionMetrics& other) {
   angle_error_sum += other.angle_error_sum;
   count += other.count;
 }
+
+namespace {
+
+double height_range(const std::vector<double>& heights) {
+  if (heights.empty()) return 0.0;
+  const auto [low, high] = std::minmax_element(heights.begin(), heights.end());
+  return *high - *low;
+}
+
+}  // namespace
+
+void HeightRangeKept::add(const Features& decoded, const Features& truth) {
+  const int frames = std::min(decoded.frame_count, truth.frame_count);
+  const double real = height_range(root_heights(truth, frames));
+  if (real >= min_range) ratios.push_back(height_range(root_heights(decoded, frames)) / real);
+}
+
+double HeightRangeKept::median() const { return nec::median(ratios); }
 
 }  // namespace nec::tat

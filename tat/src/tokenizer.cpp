@@ -32,6 +32,15 @@ torch::nn::Conv1d conv1d(int64_t in, int64_t out, int64_t kernel, int64_t stride
 }
 
 
+// The root's rise per frame at the path's scale, kRootMotionScale (y_t − y_{t−1}), from model-space rows
+// (B, T, N, kModelChannels) whose joint 0 is the root: (B, T, 1, 1), frame 0's 0.
+at::Tensor root_rise(const at::Tensor& model) {
+  const at::Tensor height = model.narrow(2, 0, 1).narrow(-1, 1, 1);  // (B, T, 1, 1)
+  const int64_t later = height.size(1) - 1;
+  return torch::constant_pad_nd(height.narrow(1, 1, later) - height.narrow(1, 0, later), {0, 0, 0, 0, 1, 0}) *
+         kRootMotionScale;
+}
+
 // The model-space row of a joint at rest (identity rot6D), which the decoders
 // predict offsets from: (kModelChannels).
 at::Tensor rest_pose_features(const at::TensorOptions& options) {
@@ -198,6 +207,7 @@ class NecEncoderImpl : public detail::EncoderImpl {
     torch::nn::Linear second(d, d);
     input_ = register_module("input", torch::nn::Sequential(first, torch::nn::ReLU(), second));
     embedding_ = register_module("embedding", torch::nn::Linear(config.joint_embedding_dim, d));
+    rise_ = register_module("rise", torch::nn::Linear(1, d));
     virtual_joint_ = register_parameter("virtual_joint", torch::randn({d}) * 0.02);
     temporal_ = register_module("temporal", torch::nn::ModuleList());
     spatial_ = register_module("spatial", torch::nn::ModuleList());
@@ -216,8 +226,10 @@ class NecEncoderImpl : public detail::EncoderImpl {
   at::Tensor forward(const at::Tensor& features, const at::Tensor& joint_mask,
                      const at::Tensor& joint_embeddings) override {
     const at::Tensor joints = input_->forward(features) + embedding_(joint_embeddings).unsqueeze(1);  // (B, T, J, D)
-    // The learnt vector plus the root's own input: through attention alone the root trajectory was lost.
-    const at::Tensor virtual_joint = virtual_joint_.view({1, 1, 1, -1}) + joints.narrow(2, 0, 1);  // (B, T, 1, D)
+    // The learnt vector plus the root's own input (through attention alone the root trajectory was lost) and
+    // its rise per frame, scaled as the horizontal path is (beside its height, a jump's rise was lost).
+    const at::Tensor virtual_joint =
+        virtual_joint_.view({1, 1, 1, -1}) + joints.narrow(2, 0, 1) + rise_(root_rise(features));  // (B, T, 1, D)
     at::Tensor tokens = torch::cat({virtual_joint, joints}, 2);
     const at::Tensor bias = key_bias(joint_mask, tokens.options());
     const size_t blocks = temporal_->size();
@@ -236,7 +248,7 @@ class NecEncoderImpl : public detail::EncoderImpl {
   int64_t attention_layers_ = 1;
   torch::nn::Sequential input_{nullptr};
   torch::nn::LayerNorm final_norm_{nullptr};
-  torch::nn::Linear embedding_{nullptr}, to_latent_{nullptr};
+  torch::nn::Linear embedding_{nullptr}, rise_{nullptr}, to_latent_{nullptr};
   at::Tensor virtual_joint_;  // (D)
   torch::nn::ModuleList temporal_{nullptr}, spatial_{nullptr};
 };
@@ -265,7 +277,7 @@ class NecDecoderImpl : public detail::DecoderImpl {
     }
     attention_layers_ = config.attention_layers;
     output_ = register_module("output", torch::nn::Linear(d, kModelChannels));
-    path_ = register_module("path", torch::nn::Linear(d, 3));
+    path_ = register_module("path", torch::nn::Linear(d, 4));
   }
 
   at::Tensor forward(const at::Tensor& quantized, const at::Tensor& joint_mask,
@@ -284,9 +296,14 @@ class NecDecoderImpl : public detail::DecoderImpl {
       tokens = per_token(temporal_->ptr<UpBlockImpl>(block), tokens);
     }
     const at::Tensor out = output_(tokens.narrow(2, 1, joints)) + rest_pose_features(tokens.options());
-    const at::Tensor path = path_(tokens.select(2, 0));  // (B, T, 3): Δx', Δz', yaw rate
-    const at::Tensor root = out.select(2, 0);           // (B, T, kModelChannels): height and R̃ stay the root's
-    const at::Tensor root_with_path = torch::cat({path.narrow(-1, 0, 1), root.narrow(-1, 1, 1), path.narrow(-1, 1, 1),
+    const at::Tensor path = path_(tokens.select(2, 0));  // (B, T, 4): Δx', Δz', yaw rate, rise
+    const at::Tensor root = out.select(2, 0);           // (B, T, kModelChannels): the height's level and R̃ stay the root's
+    // The height: the level the root joint reads (it knows the skeleton: a dog stands lower than a person)
+    // averaged over the window, moved up and down by the rise the virtual joint reads from the tokens.
+    const at::Tensor climb = (path.narrow(-1, 3, 1).narrow(1, 1, path.size(1) - 1) / kRootMotionScale).cumsum(1);
+    const at::Tensor shape = torch::constant_pad_nd(climb, {0, 0, 1, 0});  // (B, T, 1), frame 0's 0
+    const at::Tensor height = root.narrow(-1, 1, 1).mean(1, true) + shape - shape.mean(1, true);
+    const at::Tensor root_with_path = torch::cat({path.narrow(-1, 0, 1), height, path.narrow(-1, 1, 1),
                                                   root.narrow(-1, 3, 6), path.narrow(-1, 2, 1)},
                                                  -1);
     const at::Tensor joined = torch::cat({root_with_path.unsqueeze(2), out.narrow(2, 1, joints - 1)}, 2);

@@ -31,7 +31,7 @@ void require(bool ok, const std::string& message) {
 
 // The loss terms of a step, in the order they are summed over the ranks.
 std::vector<std::string> term_names(int64_t layers) {
-  std::vector<std::string> names{"loss", "rotation", "root", "position", "velocity", "commitment"};
+  std::vector<std::string> names{"loss", "rotation", "root", "position", "velocity", "vertical", "commitment"};
   for (int64_t r = 0; r < layers; ++r) names.push_back("perplexity" + std::to_string(r));
   return names;
 }
@@ -176,6 +176,7 @@ LossTerms backward_in_parts(Tokenizer& tokenizer, const BatchTensors& batch, con
     terms["root"] += share * loss.root;
     terms["position"] += share * loss.position;
     terms["velocity"] += share * loss.velocity;
+    terms["vertical"] += share * loss.vertical;
     terms["commitment"] += share * loss.commitment;
     const at::Tensor part_perplexity = out.perplexity.detach().to(torch::kCPU, torch::kFloat64) * share;
     perplexity = perplexity.defined() ? perplexity + part_perplexity : part_perplexity;
@@ -237,7 +238,7 @@ train::TrainingHooks TatTrainer::hooks(const std::string& out_dir) {
   hooks.step = [this](int64_t step) {
     const LossTerms terms = this->step(step);
     train::LossTerms out;
-    for (const char* key : {"loss", "rotation", "root", "position", "velocity", "commitment"}) {
+    for (const char* key : {"loss", "rotation", "root", "position", "velocity", "vertical", "commitment"}) {
       out.emplace_back(key, terms.at(key));
     }
     for (int64_t r = 0; r < config_.model.quantizer.layers; ++r) {

@@ -36,6 +36,10 @@ Motion decode_features(const Skeleton& skeleton, const Features& features);
 
 // Heading of the root at `frame`: radians about +Y in [-pi, pi] (nec::heading_angle).
 double root_heading(const Features& features, int frame);
+// The root's height in frames [0, frame_count) (Θ's Δy summed; frame 0 holds the height): the heading
+// frame turns about +Y only, so Δy is the height change.
+std::vector<double> root_heights(const Features& features, int frame_count);
+inline std::vector<double> root_heights(const Features& features) { return root_heights(features, features.frame_count); }
 // Turns the motion about +Y (around its start point) so that the root's
 // heading at frame 0 becomes `heading`: every root orientation is
 // premultiplied by the same turn; the displacements, in each frame's own

@@ -29,7 +29,7 @@
 namespace nec::tat {
 
 constexpr const char* kTatCheckpointFormat = "nec-tat";
-constexpr int kTatCheckpointVersion = 10;  // version 10: the canonical rest pose (motion/rest_pose.h); history in docs/checkpoint-format.md
+constexpr int kTatCheckpointVersion = 11;  // version 11: the root's rise read from the virtual joint; history in docs/checkpoint-format.md
 
 struct TatCheckpointInfo {
   int64_t window_frames = 64;   // training window T, e.g. 64; inference uses windows of this size

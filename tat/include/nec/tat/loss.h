@@ -1,5 +1,5 @@
 // Training losses of the tokenizer: feature reconstruction (rot6D and root
-// displacement), joint positions through differentiable FK, commitment.
+// displacement), the root's vertical velocity, joint positions through differentiable FK, commitment.
 //
 //   ReconstructionLoss l = reconstruction_loss(out.reconstruction, x, out.commitment_loss, LossWeights{});
 //   l.total.backward();
@@ -18,6 +18,10 @@ struct LossWeights {
   double root = 1.0;      // L1 on the root's motion in model space (model_space.h): body-frame Δ and yaw rate, scaled
   double position = 1.0;  // L1 on FK world positions, root trajectory included (normalized units)
   double velocity = 0.5;  // L1 on frame-to-frame differences of FK positions
+  // L1 on the root's rise per frame (Θ's Δy), scaled as the horizontal path (kRootMotionScale). Without it
+  // the NEC tokenizers ignore the height they read and decode one height per skeleton: no jump, sit or
+  // lie-down comes back (docs/tokenizer.md, "Vertical motion").
+  double vertical = 4.0;
 
   // Throws std::invalid_argument naming the first negative weight.
   void validate() const;
@@ -26,7 +30,7 @@ void visit_fields(train::ConfigVisitor& v, LossWeights& c);  // train/config_fie
 
 struct ReconstructionLoss {
   at::Tensor total;  // weighted sum + commitment, differentiable
-  double rotation = 0, root = 0, position = 0, velocity = 0, commitment = 0;  // unweighted terms
+  double rotation = 0, root = 0, position = 0, velocity = 0, vertical = 0, commitment = 0;  // unweighted terms
 };
 
 // prediction (B, T, J, 9) against target.features, masked by target's joint and frame masks.

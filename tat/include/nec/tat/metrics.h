@@ -1,14 +1,21 @@
 // Reconstruction metrics (NECromancer appendix D): MPJPE with and without the
-// root trajectory, and GeoDist, on batches of Θ with masks.
+// root trajectory, and GeoDist, on batches of Θ with masks; and how much of a
+// clip's vertical motion comes back.
 //
 //   ReconstructionMetrics m;
 //   m.add(prediction, target.features, target.parents, target.offsets, target.joint_mask, target.frame_mask);
 //   double mpjpe = m.mpjpe();   // mean over every real joint of every real frame, normalized units
+//   HeightRangeKept kept;
+//   kept.add(decoded, truth);   // Features of one clip
+//   double median = kept.median();
 #pragma once
+
+#include "nec/motion/features.h"
 
 #include <ATen/core/Tensor.h>
 
 #include <cstdint>
+#include <vector>
 
 namespace nec::tat {
 
@@ -28,6 +35,20 @@ struct ReconstructionMetrics {
   double mpjpe() const { return count ? position_error_sum / count : 0.0; }
   double mpjpe_no_translation() const { return count ? local_position_error_sum / count : 0.0; }
   double geodesic_degrees() const { return count ? angle_error_sum / count : 0.0; }
+};
+
+// The range of the root's height (highest minus lowest, over the clip) of decoded clips divided by their
+// real clips', for the clips whose root goes up or down by at least min_range (a jump, a sit, a lie-down; a
+// walk's bob is noise here). MPJPE hardly sees a body that stays at one height; this does.
+struct HeightRangeKept {
+  double min_range = 0.05;     // normalized units (skeleton diameters)
+  std::vector<double> ratios;  // one per clip that moves vertically
+
+  // decoded and truth: Θ of one clip (frame counts may differ: the shorter one's frames are compared).
+  void add(const Features& decoded, const Features& truth);
+  void add(const HeightRangeKept& other) { ratios.insert(ratios.end(), other.ratios.begin(), other.ratios.end()); }
+  // Median of the ratios; 0 when no clip moved vertically.
+  double median() const;
 };
 
 }  // namespace nec::tat

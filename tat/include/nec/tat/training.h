@@ -83,7 +83,7 @@ TatTrainConfig read_tat_train_config(const std::string& path);
 TatTrainConfig tat_train_config_from_json(const nlohmann::json& object, const std::string& file);
 
 // Loss terms of one batch ("loss", "rotation", "root", "position", "velocity",
-// "commitment", "perplexity0", ...).
+// "vertical", "commitment", "perplexity0", ...).
 using LossTerms = std::map<std::string, double>;
 
 // Items of a batch that one forward/backward pass takes: all of them when

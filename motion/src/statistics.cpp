@@ -1,0 +1,18 @@
+// Order statistics.
+#include "nec/motion/statistics.h"
+
+#include <algorithm>
+#include <cstddef>
+
+namespace nec {
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const auto half = static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), values.begin() + half, values.end());
+  const double upper = values[static_cast<size_t>(half)];
+  if (values.size() % 2 == 1) return upper;
+  return 0.5 * (upper + *std::max_element(values.begin(), values.begin() + half));
+}
+
+}  // namespace nec
