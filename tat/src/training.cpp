@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 
@@ -29,9 +30,12 @@ void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument("TatTrainConfig: " + message);
 }
 
+// The loss terms of a step (ReconstructionLoss and the total), in the order they are logged.
+constexpr const char* kLossTermNames[] = {"loss", "rotation", "root", "position", "velocity", "vertical", "commitment"};
+
 // The loss terms of a step, in the order they are summed over the ranks.
 std::vector<std::string> term_names(int64_t layers) {
-  std::vector<std::string> names{"loss", "rotation", "root", "position", "velocity", "vertical", "commitment"};
+  std::vector<std::string> names(std::begin(kLossTermNames), std::end(kLossTermNames));
   for (int64_t r = 0; r < layers; ++r) names.push_back("perplexity" + std::to_string(r));
   return names;
 }
@@ -238,7 +242,7 @@ train::TrainingHooks TatTrainer::hooks(const std::string& out_dir) {
   hooks.step = [this](int64_t step) {
     const LossTerms terms = this->step(step);
     train::LossTerms out;
-    for (const char* key : {"loss", "rotation", "root", "position", "velocity", "vertical", "commitment"}) {
+    for (const char* key : kLossTermNames) {
       out.emplace_back(key, terms.at(key));
     }
     for (int64_t r = 0; r < config_.model.quantizer.layers; ++r) {
