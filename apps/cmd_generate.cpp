@@ -47,7 +47,7 @@ int run_generate(int argc, char** argv) {
                   "in OUT.txt beside it (what `nec eval t2m` reads). Several captions make one long motion, each\n"
                   "segment going on from the one before. --samples K writes OUT_1.bvh ... OUT_K.bvh.");
   cli.positional("CAPTION", "what the motion shows, e.g. \"a dog walks forward\"; several: one segment each", true, true);
-  cli.option("--skeleton", "SKELETON.bvh", "", "the skeleton to generate for (its motion is not used)", true);
+  cli.option("--skeleton", "SKELETON", "", "BVH file or rigged asset to generate for (its motion is not used)", true);
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--model", "GPT_CKPT", "", "GPT checkpoint (from `nec train gpt`); default: models/default/gpt");
   cli.option("--seconds", "S", "auto", "length of each segment (up to 60); auto: the GPT ends it");

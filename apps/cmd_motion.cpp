@@ -1,9 +1,11 @@
-// nec info | convert | normalize | augment: single-file BVH commands.
+// nec info | convert | normalize | augment: single-file commands (BVH, or a rigged asset read as BVH).
 #include "command_line.h"
 #include "commands.h"
 
 #include "nec/motion/augment.h"
 #include "nec/motion/bvh.h"
+#include "nec/motion/clip_file.h"
+#include "nec/motion/frame_rate.h"
 #include "nec/motion/names.h"
 #include "nec/motion/preprocess.h"
 #include "nec/motion/rest_pose.h"
@@ -32,6 +34,23 @@ void print_tree(const Skeleton& s) {
   }
 }
 
+bool is_bvh(const std::string& path) {
+  return path.size() >= 4 && (path.compare(path.size() - 4, 4, ".bvh") == 0 || path.compare(path.size() - 4, 4, ".BVH") == 0);
+}
+
+void declare_source_fps(CommandLine& cli) {
+  cli.option("--source-fps", "FPS", "0",
+             "the motion's true frame rate, replacing the file's (BVH Frame Time); assets are sampled at it\n"
+             "(0: the file's rate; assets 30 fps)");
+}
+
+ClipReadOptions read_options(const CommandLine& cli) {
+  ClipReadOptions options;
+  options.fps = cli.number("--source-fps");
+  if (options.fps < 0) throw UsageError("--source-fps must be >= 0");
+  return options;
+}
+
 EulerOrder parse_order_option(const std::string& text) {
   const auto order = parse_euler_order(text);
   if (!order) throw UsageError("--order must be one of XYZ XZY YXZ YZX ZXY ZYX, got '" + text + "'");
@@ -41,19 +60,25 @@ EulerOrder parse_order_option(const std::string& text) {
 }  // namespace
 
 int run_info(int argc, char** argv) {
-  CommandLine cli("nec info", "Print a BVH file's skeleton and motion summary.");
-  cli.positional("FILE.bvh", "BVH file to describe");
+  CommandLine cli("nec info",
+                  "Print a motion file's skeleton and motion summary: BVH, or a rigged asset (FBX, glTF/GLB,\n"
+                  "Collada, .x) with its armature read as BVH would hold it, one line per animation.");
+  cli.positional("FILE", "BVH file or rigged asset to describe (FILE#NAME: one animation of an asset)");
   cli.flag("--no-tree", "omit the joint tree");
-  cli.flag("--json", "print one JSON line: joints, end_sites, frames, fps, diameter");
+  cli.flag("--json", "print one JSON line: joints, end_sites, frames, fps, diameter (the first animation)");
+  declare_source_fps(cli);
   cli.example("nec info /usr/share/assimp/models/BVH/01_01.bvh");
+  cli.example("nec info /usr/share/assimp/models/X/Testwuson.X");
   if (!cli.parse(argc, argv)) return 0;
-  const std::string path = cli.positional_value("FILE.bvh");
-  const Clip clip = read_bvh(path);
+  const std::string path = cli.positional_value("FILE");
+  const std::vector<Clip> clips = read_clips(path, read_options(cli));
+  const Clip& clip = clips.front();
   const Skeleton& s = clip.skeleton;
   const Motion& m = clip.motion;
   if (cli.is_set("--json")) {
-    fmt::print("{{\"joints\": {}, \"end_sites\": {}, \"frames\": {}, \"fps\": {:.9g}, \"diameter\": {:.9g}}}\n",
-               s.joint_count(), s.end_sites.size(), m.frame_count, m.fps, s.diameter());
+    fmt::print("{{\"joints\": {}, \"end_sites\": {}, \"frames\": {}, \"fps\": {:.9g}, \"diameter\": {:.9g}, "
+               "\"animations\": {}}}\n",
+               s.joint_count(), s.end_sites.size(), m.frame_count, m.fps, s.diameter(), clips.size());
     return 0;
   }
   fmt::print("file      {}\n", path);
@@ -63,8 +88,21 @@ int run_info(int argc, char** argv) {
                for (int j = 0; j < s.joint_count(); ++j) d = std::max(d, s.depth(j));
                return d;
              }());
-  fmt::print("frames    {} at {:.6g} fps ({:.2f} s)\n", m.frame_count, m.fps, m.duration_seconds());
-  fmt::print("diameter  {:.6g} (longest root-to-leaf chain, file units)\n", s.diameter());
+  if (clips.size() == 1 && clip.name.empty()) {
+    fmt::print("frames    {} at {:.6g} fps ({:.2f} s)\n", m.frame_count, m.fps, m.duration_seconds());
+  } else {
+    for (const Clip& c : clips) {
+      fmt::print("animation '{}': {} frames at {:.6g} fps ({:.2f} s)\n", c.name, c.motion.frame_count, c.motion.fps,
+                 c.motion.duration_seconds());
+    }
+  }
+  fmt::print("diameter  {:.6g} (longest root-to-leaf chain, {})\n", s.diameter(),
+             is_bvh(path) ? "file units" : "metres");
+  const FrameRateCheck rate = check_frame_rate(m);
+  if (rate.turn_per_frame > 0.0) {
+    fmt::print("turning   {:.3g}° per frame, {:.3g}°/s (median over frames of the joints' mean)\n", rate.turn_per_frame,
+               rate.turn_per_second);
+  }
   std::map<std::string, int> layouts;
   for (const ChannelLayout& layout : s.channels) ++layouts[layout_text(layout)];
   for (const auto& [text, count] : layouts) fmt::print("channels  {} joint(s): {}\n", count, text);
@@ -77,15 +115,20 @@ int run_info(int argc, char** argv) {
 }
 
 int run_convert(int argc, char** argv) {
-  CommandLine cli("nec convert", "Read a BVH file and write it back, unchanged or with another Euler order.");
-  cli.positional("IN.bvh", "input BVH file");
+  CommandLine cli("nec convert",
+                  "Write a motion file as BVH: a BVH file unchanged or with another Euler order, or the armature\n"
+                  "and one animation of a rigged asset (FBX, glTF/GLB, Collada, .x) in metres, +Y up.");
+  cli.positional("IN", "input BVH file or rigged asset (IN#NAME: one animation of an asset)");
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--order", "ORDER", "keep", "Euler order of every rotated joint: XYZ XZY YXZ YZX ZXY ZYX, or keep");
+  declare_source_fps(cli);
   cli.example("nec convert walk.bvh -o walk_xyz.bvh --order XYZ");
+  cli.example("nec convert /usr/share/assimp/models/X/Testwuson.X#Wuson_Walk -o wuson_walk.bvh");
   if (!cli.parse(argc, argv)) return 0;
   BvhWriteOptions options;
   if (cli.value("--order") != "keep") options.euler_order = parse_order_option(cli.value("--order"));
-  const Clip clip = read_bvh(cli.positional_value("IN.bvh"));
+  const Clip clip = read_clip(cli.positional_value("IN"), read_options(cli));
+  for (const std::string& warning : clip.warnings) fmt::print(stderr, "nec: warning: {}: {}\n", cli.positional_value("IN"), warning);
   write_bvh(cli.value("-o"), clip.skeleton, clip.motion, options);
   fmt::print("wrote {} ({} joints, {} frames)\n", cli.value("-o"), clip.skeleton.joint_count(), clip.motion.frame_count);
   return 0;
@@ -96,7 +139,9 @@ int run_normalize(int argc, char** argv) {
                   "Apply the unified preprocessing (dummy root merge, root-only translation, unit diameter, +Y up,\n"
                   "frame 0 facing +Z, corpus frame rate, the canonical rest pose: the clip's mean pose with\n"
                   "world-aligned joint frames) and write the result; prints what was changed.");
-  cli.positional("IN.bvh", "input BVH file");
+  cli.positional("IN", "input BVH file or rigged asset");
+  cli.flag("--fold-translations", "fold every non-root joint's translation into its offset, even when it varies more\n"
+                                   "than the jitter limits (1 % of the diameter, 10 % of the bone)");
   cli.flag("--keep-rest", "keep the file's rest pose and joint frames (what the models see is the canonical rest)");
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--fps", "FPS", "30", "target frame rate; 0 keeps the file's");
@@ -108,8 +153,9 @@ int run_normalize(int argc, char** argv) {
   if (options.target_fps < 0) throw UsageError("--fps must be >= 0");
   options.up = cli.up_axis("--up");
   options.canonical_rest = !cli.is_set("--keep-rest");
-  const std::string path = cli.positional_value("IN.bvh");
-  const PreparedClip prepared = preprocess(read_bvh(path), path, options);
+  options.fold_any_translation = cli.is_set("--fold-translations");
+  const std::string path = cli.positional_value("IN");
+  const PreparedClip prepared = preprocess(read_clip(path), path, options);
   for (const std::string& change : prepared.report.changes) fmt::print("{}: {}\n", path, change);
   if (!prepared.report.accepted()) {
     fmt::print(stderr, "nec: error: {}: rejected: {}\n", path, prepared.report.rejection);
@@ -129,7 +175,7 @@ int run_augment(int argc, char** argv) {
                   "axes (the joint-orient convention of Maya / MotionBuilder exports: every joint's +X along its\n"
                   "bone, the rest pose a straight line), axes-random (a random frame per joint).\n"
                   "Every kind keeps the world positions of the joints it keeps, except length.");
-  cli.positional("IN.bvh", "input BVH file");
+  cli.positional("IN", "input BVH file or rigged asset");
   cli.option("--kind", "KIND", "rest", "rest | length | joints | remove | subdivide | axes | axes-random");
   cli.option("--seed", "N", "0", "random seed; the same seed gives the same rig");
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
@@ -150,8 +196,8 @@ int run_augment(int argc, char** argv) {
                        kind_name + "'");
     }
   }
-  const std::string path = cli.positional_value("IN.bvh");
-  const Clip clip = read_bvh(path);
+  const std::string path = cli.positional_value("IN");
+  const Clip clip = read_clip(path);
   std::vector<std::string> canonical;
   for (const std::string& name : clip.skeleton.names) canonical.push_back(canonical_joint_name(name));
   const Clip out = axes ? reorient_joint_axes(clip, kind_name == "axes" ? JointAxes::BonesAlongX : JointAxes::Random, rng)

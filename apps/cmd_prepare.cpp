@@ -1,4 +1,4 @@
-// nec prepare: folders of BVH (+ captions) -> dataset cache.
+// nec prepare: folders of BVH files and rigged assets (+ captions) -> dataset cache.
 #include "command_line.h"
 #include "commands.h"
 
@@ -22,12 +22,13 @@ double fraction_option(const CommandLine& cli, const std::string& name) {
 
 int run_prepare(int argc, char** argv) {
   CommandLine cli("nec prepare",
-                  "Turn folders of BVH files (+ captions) into one dataset cache: every file is read, captioned,\n"
-                  "preprocessed (as nec normalize) and split into train/val/test by source file. Captions come\n"
+                  "Turn folders of BVH files and rigged assets (+ captions) into one dataset cache: every file\n"
+                  "(every animation of an asset) is read, captioned, preprocessed (as nec normalize) and split into train/val/test by source file. Captions come\n"
                   "from clip.txt next to clip.bvh, --captions tables, or Bandai labels; takes without any are cut\n"
                   "into 2-6 s clips captioned from their kinematics (speed, turning, height, jumps).\n"
                   "Prints one line per file and a summary table.");
-  cli.positional("INPUT", "folder (searched recursively) or BVH file; NAME=PATH names its dataset", true, true);
+  cli.positional("INPUT", "folder (searched recursively) or file (BVH, FBX, glTF/GLB, Collada, .x); NAME=PATH names\n"
+                          "its dataset", true, true);
   cli.option("-o", "CACHE", "", "output cache directory (replaced atomically)", true);
   cli.option("--fps", "FPS", "30", "corpus frame rate");
   cli.option("--up", "AXIS", "auto", "up axis of the inputs: auto, y or z");
@@ -38,6 +39,8 @@ int run_prepare(int argc, char** argv) {
   cli.option("--hold-out-dataset", "NAMES", "", "datasets (comma-separated) put wholly in test");
   cli.option("--captions", "CSV", "", "caption tables `file,caption` (comma-separated paths)");
   cli.flag("--no-kinematic-captions", "keep uncaptioned takes whole and without captions");
+  cli.flag("--fold-translations", "fold every non-root joint's translation into its offset, even when it varies more\n"
+                                   "than the jitter limits (1 % of the diameter, 10 % of the bone)");
   cli.option("--creature", "NOUN", "creature", "noun for segmenter captions; DATASET=NOUN pairs allowed, comma-separated");
   cli.option("--threads", "N", "0", "worker threads; 0 = all cores");
   cli.flag("--quiet", "print only the summary");
@@ -48,6 +51,7 @@ int run_prepare(int argc, char** argv) {
   corpus.preprocess.target_fps = cli.number("--fps");
   if (corpus.preprocess.target_fps <= 0) throw UsageError("--fps must be > 0");
   corpus.preprocess.up = cli.up_axis("--up");
+  corpus.preprocess.fold_any_translation = cli.is_set("--fold-translations");
   corpus.kinematic_captions = !cli.is_set("--no-kinematic-captions");
   corpus.threads = cli.integer("--threads");
   for (const std::string& csv : cli.list("--captions")) corpus.captions.tables.push_back(CaptionTable::read(csv));

@@ -61,7 +61,7 @@ int run_encode(int argc, char** argv) {
   CommandLine cli("nec encode",
                   "Turn a BVH clip into motion tokens (JSON) with a trained tokenizer. Long clips are encoded\n"
                   "in overlapping windows of the training length.");
-  cli.positional("IN.bvh", "input BVH file");
+  cli.positional("IN", "input BVH file or rigged asset (IN#NAME: one animation of an asset)");
   cli.option("-o", "TOKENS.json", "", "output token file", true);
   cli.option("--up", "AXIS", "auto", "up axis of the input: auto, y or z");
   declare_model_options(cli);
@@ -69,7 +69,7 @@ int run_encode(int argc, char** argv) {
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
   tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
-  const std::string& path = cli.positional_value("IN.bvh");
+  const std::string& path = cli.positional_value("IN");
   const tat::TokenFile tokens =
       tat::encode_file(session, tat::prepare_for_model(path, session.model.info.fps, cli.up_axis("--up")), path);
   tat::write_tokens(cli.value("-o"), tokens);
@@ -83,7 +83,7 @@ int run_decode(int argc, char** argv) {
                   "Decode motion tokens onto a skeleton: the output BVH has the skeleton file's joint names,\n"
                   "channels, Euler orders, units and up axis; the motion keeps the heading it was encoded with.");
   cli.positional("TOKENS.json", "token file from `nec encode`");
-  cli.option("--skeleton", "TARGET.bvh", "", "BVH file whose skeleton receives the motion (its motion is ignored)",
+  cli.option("--skeleton", "TARGET", "", "BVH file or rigged asset whose skeleton receives the motion (its motion is ignored)",
              true);
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--up", "AXIS", "auto", "up axis of the skeleton file: auto, y or z");
@@ -103,11 +103,11 @@ int run_decode(int argc, char** argv) {
 
 int run_transfer(int argc, char** argv) {
   CommandLine cli("nec transfer",
-                  "Move a clip onto another skeleton (any species): encode SRC.bvh to tokens with its own skeleton,\n"
+                  "Move a clip onto another skeleton (any species): encode SRC to tokens with its own skeleton,\n"
                   "decode them with the target's. The output uses the target file's joint names, channels, Euler\n"
                   "orders, units and up axis; speed scales with the target's size; it faces and goes where the source does.");
-  cli.positional("SRC.bvh", "the motion to transfer");
-  cli.option("--to", "TARGET.bvh", "", "BVH file whose skeleton receives the motion", true);
+  cli.positional("SRC", "the motion to transfer: BVH file or rigged asset (SRC#NAME: one animation of an asset)");
+  cli.option("--to", "TARGET", "", "BVH file or rigged asset whose skeleton receives the motion", true);
   cli.option("-o", "OUT.bvh", "", "output BVH file", true);
   cli.option("--up", "AXIS", "auto", "up axis of both input files: auto, y or z");
   cli.option("--tokens", "FILE", "", "also write the intermediate tokens here");
@@ -119,7 +119,7 @@ int run_transfer(int argc, char** argv) {
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
   tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
-  const std::string& path = cli.positional_value("SRC.bvh");
+  const std::string& path = cli.positional_value("SRC");
   const PreparedClip source = tat::prepare_for_model(path, session.model.info.fps, cli.up_axis("--up"));
   const tat::TokenFile tokens = tat::encode_file(session, source, path);
   const tat::DecodeReport report =

@@ -2,7 +2,7 @@
 #include "command_line.h"
 #include "commands.h"
 
-#include "nec/motion/bvh.h"
+#include "nec/motion/clip_file.h"
 #include "nec/motion/files.h"
 #include "nec/viewer/html.h"
 #include "nec/viewer/strip.h"
@@ -54,7 +54,7 @@ int run_view(int argc, char** argv) {
                   "to `clip.bvh` (or the Bandai labels) unless --caption gives them.\n"
                   "With --frames K, write a PNG strip instead: K evenly spaced frames per clip (one row per clip),\n"
                   "drawn from the creature's right side; left bones blue, right red.");
-  cli.positional("IN.bvh", "BVH files, shown side by side (page) or one row each (strip)", true, true);
+  cli.positional("IN", "BVH files or rigged assets, shown side by side (page) or one row each (strip)", true, true);
   cli.option("-o", "OUT", "", "output file: an .html page, or a .png strip with --frames", true);
   cli.option("--frames", "K", "0", "write a PNG strip of K frames per clip instead of a page; 0 writes the page");
   cli.option("--caption", "TEXT", "",
@@ -71,7 +71,7 @@ int run_view(int argc, char** argv) {
   cli.example("nec view --frames 6 /usr/share/assimp/models/BVH/01_01.bvh -o strip.png");
   if (!cli.parse(static_cast<int>(rest.size()), rest.data())) return 0;
 
-  const std::vector<std::string>& inputs = cli.positionals("IN.bvh");
+  const std::vector<std::string>& inputs = cli.positionals("IN");
   if (captions.size() > inputs.size()) {
     throw UsageError(fmt::format("{} --caption options for {} input files", captions.size(), inputs.size()));
   }
@@ -95,7 +95,7 @@ int run_view(int argc, char** argv) {
     }
     std::vector<viewer::Image> rows;
     for (const std::string& path : inputs) {
-      const Clip clip = read_bvh(path);
+      const Clip clip = read_clip(path);
       const viewer::StripView view = viewer::plan_strip(clip, options);
       rows.push_back(viewer::draw_strip(clip, view));
       fmt::print("{}: {} frames shown of {}, viewed from its right side (forward: {})\n", path, view.frames.size(),

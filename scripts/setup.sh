@@ -7,10 +7,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 source scripts/lib.sh
+# libassimp-dev: FBX / glTF / Collada / .x assets (assets/).
 # libgloo-dev: headers of the Gloo transport that libtorch's c10d process groups use (train/).
 # libopenblas0-openmp: Debian's libtorch calls the generic libblas.so.3, which is the slow
 # reference BLAS unless an optimized one is installed (OpenMP flavour, like libtorch's threads).
-ensure_packages setup libopenblas0-openmp build-essential cmake ninja-build ccache pkg-config libtorch-dev libeigen3-dev nlohmann-json3-dev libsentencepiece-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libgloo-dev assimp-testmodels
+ensure_packages setup libopenblas0-openmp build-essential cmake ninja-build ccache pkg-config libtorch-dev libeigen3-dev nlohmann-json3-dev libsentencepiece-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libgloo-dev libassimp-dev assimp-testmodels
 
 scripts/setup_viewer_assets.sh
 

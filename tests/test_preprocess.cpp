@@ -186,14 +186,37 @@ TEST(Preprocess, FoldsConstantTranslationsAndRejectsMovingOnes) {
   clip.skeleton.channels[1] = ChannelLayout::position_rotations(EulerOrder::ZXY);
   PreprocessReport ok;
   Clip folded = clip;
-  EXPECT_TRUE(fold_joint_translations(folded, 1e-3, ok));
+  EXPECT_TRUE(fold_joint_translations(folded, PreprocessOptions{}, ok));
   EXPECT_FALSE(folded.skeleton.channels[1].has_position());
   for (int t = 0; t < 5; ++t) clip.motion.translation(t, 1) += Vec3(0, 0.5 * t, 0);  // a stretching spine
   PreprocessReport bad;
-  EXPECT_FALSE(fold_joint_translations(clip, 1e-3, bad));
+  EXPECT_FALSE(fold_joint_translations(clip, PreprocessOptions{}, bad));
   EXPECT_NE(bad.rejection.find("'Spine'"), std::string::npos) << bad.rejection;
+  EXPECT_NE(bad.rejection.find("--fold-translations"), std::string::npos) << bad.rejection;
   const PreparedClip p = preprocess(clip, "stretch.bvh");
   EXPECT_FALSE(p.report.accepted());
+  PreprocessOptions anyway;
+  anyway.fold_any_translation = true;
+  EXPECT_TRUE(preprocess(clip, "stretch.bvh", anyway).report.accepted());
+}
+
+// 3ds Max-style exports key every joint's translation, with float noise: small
+// variations fold into the offset and the report names the largest.
+TEST(Preprocess, FoldsJitteringTranslationsAndReportsTheLargest) {
+  Clip clip = walking_biped();
+  const double diameter = clip.skeleton.diameter();
+  const double bone = clip.skeleton.offsets[1].norm();
+  clip.skeleton.channels[1] = ChannelLayout::position_rotations(EulerOrder::ZXY);
+  const double jitter = std::min(0.004 * diameter, 0.05 * bone);  // within both limits
+  for (int t = 0; t < clip.motion.frame_count; ++t) {
+    clip.motion.translation(t, 1) += Vec3(t % 2 == 0 ? jitter : -jitter, 0, 0);
+  }
+  PreprocessReport report;
+  ASSERT_TRUE(fold_joint_translations(clip, PreprocessOptions{}, report)) << report.rejection;
+  ASSERT_EQ(report.changes.size(), 1u);
+  EXPECT_NE(report.changes[0].find("largest variation folded"), std::string::npos) << report.changes[0];
+  EXPECT_NE(report.changes[0].find("'Spine'"), std::string::npos) << report.changes[0];
+  EXPECT_NEAR((clip.motion.translation(0, 1) - clip.skeleton.offsets[1]).norm(), 0.0, 1e-12);
 }
 
 TEST(Preprocess, RejectsAbnormalBonesAndEmptyClips) {

@@ -2,7 +2,7 @@
 // preprocessing, in parallel over files.
 #include "nec/motion/corpus.h"
 
-#include "nec/motion/bvh.h"
+#include "nec/motion/clip_file.h"
 #include "nec/motion/error.h"
 
 #include <algorithm>
@@ -15,10 +15,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool is_bvh(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".bvh";
+std::string extension_list() {
+  std::string out;
+  for (const std::string& ext : motion_file_extensions()) out += (out.empty() ? "" : " ") + ext;
+  return out;
 }
 
 std::string folder_name(const fs::path& folder) {
@@ -42,20 +42,10 @@ CacheEntry rejected_entry(const CorpusFile& file, const std::string& reason) {
   return entry;
 }
 
-FileOutput load_file(const CorpusFile& file, const CorpusOptions& options) {
-  FileOutput out;
-  out.result.path = file.path;
-  out.result.dataset = file.dataset;
-  Clip take;
-  std::vector<std::string> captions;
-  try {
-    take = read_bvh(file.path);
-    captions = captions_for(file.path, options.captions);
-  } catch (const InputError& e) {
-    out.result.error = e.what();
-    out.entries.push_back(rejected_entry(file, e.what()));
-    return out;
-  }
+// One take (a BVH file, or one animation of an asset) -> entries, captioned or segmented.
+void load_take(const CorpusFile& file, const Clip& take, const std::string& id, std::vector<std::string> captions,
+               const CorpusOptions& options, FileOutput& out) {
+  const bool first_take = out.entries.empty();
   const bool segment = captions.empty() && options.kinematic_captions;
   if (!segment) {
     CacheEntry entry;
@@ -63,34 +53,57 @@ FileOutput load_file(const CorpusFile& file, const CorpusOptions& options) {
     entry.source = file.path;
     entry.dataset = file.dataset;
     entry.captions = std::move(captions);
-    out.result.changes = entry.prepared.report.changes;
+    if (id != file.path) entry.id = id;
+    if (first_take) out.result.changes = entry.prepared.report.changes;
     if (entry.prepared.report.accepted()) {
-      out.result.clips = 1;
-    } else {
+      ++out.result.clips;
+    } else if (out.result.error.empty()) {
       out.result.error = entry.prepared.report.rejection;
     }
     out.entries.push_back(std::move(entry));
-    return out;
+    return;
   }
   const TakeSegmentation cut = segment_take(take, options.segment);
-  out.result.segments = static_cast<int>(cut.segments.size());
+  out.result.segments += static_cast<int>(cut.segments.size());
   for (size_t i = 0; i < cut.segments.size(); ++i) {
     const Segment& s = cut.segments[i];
-    Clip piece{take.skeleton, take.motion.slice(s.begin, s.end), take.warnings};
+    Clip piece{take.skeleton, take.motion.slice(s.begin, s.end), take.warnings, take.name};
     CacheEntry entry;
     entry.prepared = preprocess(piece, file.path, options.preprocess);
     entry.source = file.path;
     entry.dataset = file.dataset;
     entry.captions = s.captions;
-    entry.id = file.path + "#" + std::to_string(i);
+    entry.id = id + "#" + std::to_string(i);
     // The segment's first frame at the corpus frame rate.
     const double fps = entry.prepared.clip.motion.fps;
     entry.source_frame = static_cast<int>(std::lround(s.begin / take.motion.fps * fps));
-    if (i == 0) out.result.changes = entry.prepared.report.changes;
+    if (first_take && i == 0) out.result.changes = entry.prepared.report.changes;
     if (entry.prepared.report.accepted()) ++out.result.clips;
     out.entries.push_back(std::move(entry));
   }
-  if (out.result.clips == 0) out.result.error = "every segment was rejected";
+}
+
+FileOutput load_file(const CorpusFile& file, const CorpusOptions& options) {
+  FileOutput out;
+  out.result.path = file.path;
+  out.result.dataset = file.dataset;
+  std::vector<Clip> takes;
+  std::vector<std::string> captions;
+  try {
+    takes = read_clips(file.path);
+    captions = captions_for(file.path, options.captions);
+  } catch (const InputError& e) {
+    out.result.error = e.what();
+    out.entries.push_back(rejected_entry(file, e.what()));
+    return out;
+  }
+  // A file's captions describe its one take; the animations of a file that holds several are segmented.
+  for (const Clip& take : takes) {
+    const bool several = takes.size() > 1;
+    load_take(file, take, several ? file.path + "#" + take.name : file.path,
+              several ? std::vector<std::string>{} : captions, options, out);
+  }
+  if (out.result.clips == 0 && out.result.error.empty()) out.result.error = "every segment was rejected";
   return out;
 }
 
@@ -111,10 +124,10 @@ std::vector<CorpusFile> find_corpus_files(const std::vector<std::string>& inputs
       std::vector<std::string> found;
       for (auto it = fs::recursive_directory_iterator(path, fs::directory_options::follow_directory_symlink, ec);
            !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
-        if (it->is_regular_file(ec) && is_bvh(it->path())) found.push_back(it->path().string());
+        if (it->is_regular_file(ec) && is_motion_file(it->path().string())) found.push_back(it->path().string());
       }
       if (ec) throw InputError(path, 0, "cannot list the folder: " + ec.message());
-      if (found.empty()) throw InputError(path, 0, "no .bvh files in this folder");
+      if (found.empty()) throw InputError(path, 0, "no motion files in this folder (" + extension_list() + ")");
       std::sort(found.begin(), found.end());
       const std::string name = dataset.empty() ? folder_name(path) : dataset;
       for (std::string& f : found) files.push_back({std::move(f), name});

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -243,6 +244,8 @@ Json options_to_json(const CacheOptions& options) {
   out["preprocess"] = {{"target_fps", p.target_fps},
                        {"max_bone_ratio", p.max_bone_ratio},
                        {"translation_tolerance", p.translation_tolerance},
+                       {"translation_bone_tolerance", p.translation_bone_tolerance},
+                       {"fold_any_translation", p.fold_any_translation},
                        {"up", up_axis_name(p.up)},
                        {"min_frames", p.min_frames},
                        {"canonical_rest", p.canonical_rest}};
@@ -260,6 +263,9 @@ CacheOptions options_from_json(const Json& j, const std::string& file) {
   options.preprocess.target_fps = p.at("target_fps").get<double>();
   options.preprocess.max_bone_ratio = p.at("max_bone_ratio").get<double>();
   options.preprocess.translation_tolerance = p.at("translation_tolerance").get<double>();
+  // Caches written before these limits existed folded by the diameter alone.
+  options.preprocess.translation_bone_tolerance = p.value("translation_bone_tolerance", std::numeric_limits<double>::max());
+  options.preprocess.fold_any_translation = p.value("fold_any_translation", false);
   options.preprocess.up = parse_up_axis(p.at("up").get<std::string>(), file);
   options.preprocess.min_frames = p.at("min_frames").get<int>();
   options.preprocess.canonical_rest = p.at("canonical_rest").get<bool>();

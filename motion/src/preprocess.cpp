@@ -3,6 +3,7 @@
 #include "nec/motion/preprocess.h"
 
 #include "nec/motion/bvh.h"
+#include "nec/motion/clip_file.h"
 #include "nec/motion/error.h"
 #include "nec/motion/features.h"
 #include "nec/motion/kinematics.h"
@@ -147,7 +148,7 @@ void merge_dummy_root(Clip& clip, PreprocessReport& report) {
   clip.motion = std::move(out);
 }
 
-bool fold_joint_translations(Clip& clip, double tolerance, PreprocessReport& report) {
+bool fold_joint_translations(Clip& clip, const PreprocessOptions& options, PreprocessReport& report) {
   Skeleton& s = clip.skeleton;
   Motion& m = clip.motion;
   int folded = 0;
@@ -160,16 +161,26 @@ bool fold_joint_translations(Clip& clip, double tolerance, PreprocessReport& rep
     s.offsets[j] = means[j];
   }
   const double diameter = std::max(s.diameter(), 1e-12);
+  double largest = 0.0;  // the largest variation folded, and where
+  int largest_joint = -1;
   for (int j = 1; j < s.joint_count(); ++j) {
     if (!s.channels[j].has_position()) continue;
     double deviation = 0.0;
     for (int t = 0; t < m.frame_count; ++t) deviation = std::max(deviation, (m.translation(t, j) - means[j]).norm());
-    if (deviation > tolerance * diameter) {
+    const double bone = means[j].norm();
+    const bool stretches = deviation > options.translation_tolerance * diameter ||
+                           deviation > options.translation_bone_tolerance * bone;
+    if (stretches && !options.fold_any_translation) {
       report.rejection = fmt::format(
-          "joint '{}' moves relative to its parent by up to {:.3g} ({:.3g} diameters, limit {:.3g}): "
-          "translation is allowed only at the root",
-          s.names[j], deviation, deviation / diameter, tolerance);
+          "joint '{}' moves relative to its parent by up to {:.3g} ({:.3g} diameters, {:.3g} of its bone; limits "
+          "{:.3g} and {:.3g}): translation is allowed only at the root (fold it anyway with --fold-translations)",
+          s.names[j], deviation, deviation / diameter, bone > 0.0 ? deviation / bone : INFINITY,
+          options.translation_tolerance, options.translation_bone_tolerance);
       return false;
+    }
+    if (deviation > largest) {
+      largest = deviation;
+      largest_joint = j;
     }
     for (int t = 0; t < m.frame_count; ++t) m.translation(t, j) = means[j];
     ChannelLayout rotations_only;
@@ -179,8 +190,14 @@ bool fold_joint_translations(Clip& clip, double tolerance, PreprocessReport& rep
     s.channels[j] = rotations_only;
     ++folded;
   }
-  if (folded > 0) {
+  if (folded > 0 && largest_joint < 0) {
     report.changes.push_back(fmt::format("folded constant position channels of {} joint(s) into offsets", folded));
+  } else if (folded > 0) {
+    report.changes.push_back(fmt::format(
+        "folded position channels of {} joint(s) into offsets (their mean); the largest variation folded: {:.3g} "
+        "({:.3g} diameters, {:.3g} of the bone) at '{}'",
+        folded, largest, largest / diameter, largest / std::max(means[largest_joint].norm(), 1e-12),
+        s.names[largest_joint]));
   }
   return true;
 }
@@ -297,7 +314,7 @@ PreparedClip preprocess(const Clip& raw, const std::string& file, const Preproce
   }
   // 1-2. One tree with translation only at the root.
   merge_dummy_root(clip, report);
-  if (!fold_joint_translations(clip, options.translation_tolerance, report)) return out;
+  if (!fold_joint_translations(clip, options, report)) return out;
 
   // 3. Abnormal bones.
   const double diameter = clip.skeleton.diameter();
@@ -380,7 +397,7 @@ PreparedClip preprocess(const Clip& raw, const std::string& file, const Preproce
 }
 
 PreparedClip preprocess_file(const std::string& path, const PreprocessOptions& options) {
-  PreparedClip prepared = preprocess(read_bvh(path), path, options);
+  PreparedClip prepared = preprocess(read_clip(path), path, options);
   if (!prepared.report.accepted()) throw InputError(path, 0, "rejected by preprocessing: " + prepared.report.rejection);
   return prepared;
 }

@@ -134,4 +134,5 @@ def main():
     sys.exit(1 if failures else 0)
 
 
-main()
+if __name__ == "__main__":  # blender_export_assets.py imports import_bvh from here
+    main()

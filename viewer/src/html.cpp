@@ -5,6 +5,7 @@
 #include "embedded_assets.h"
 
 #include "nec/motion/bvh.h"
+#include "nec/motion/clip_file.h"
 #include "nec/motion/captions.h"
 #include "nec/motion/kinematics.h"
 #include "nec/motion/names.h"
@@ -123,7 +124,7 @@ void ViewOptions::validate() const {
 
 ViewClip load_view_clip(const std::string& bvh_path) {
   ViewClip out;
-  out.clip = read_bvh(bvh_path);
+  out.clip = read_clip(bvh_path);
   out.name = std::filesystem::path(bvh_path).stem().string();
   out.captions = captions_for(bvh_path);
   return out;

@@ -1,11 +1,11 @@
-// Reading a corpus: folders of BVH files (+ captions) -> cache entries.
+// Reading a corpus: folders of motion files (BVH, and assets when registered; + captions) -> cache entries.
 //
 //   CorpusOptions options;                        // preprocessing, captions, segmentation
 //   auto files = find_corpus_files({"bandai=../shared/data/bandai", "my_rigs/"});
 //   CorpusResult corpus = load_corpus(files, options);
 //   write_cache("cache/", corpus.entries, CacheOptions{options.preprocess, split});
 //
-// Each input is a folder (searched recursively for *.bvh) or a file, optionally
+// Each input is a folder (searched recursively for motion files, motion/clip_file.h) or a file, optionally
 // prefixed with `NAME=` to name its dataset; otherwise the dataset is named
 // after the folder (or, for a file, its parent folder). Takes without
 // captions (the dog) are cut into clips (SegmentOptions: 2–6 s) and captioned
@@ -37,8 +37,8 @@ struct CorpusOptions {
   int threads = 0;                    // worker threads; 0 = all cores
 };
 
-// Expands folders into their *.bvh files (sorted). Throws InputError for an
-// input that does not exist or a folder without BVH files.
+// Expands folders into their motion files (sorted). Throws InputError for an
+// input that does not exist or a folder without motion files.
 std::vector<CorpusFile> find_corpus_files(const std::vector<std::string>& inputs);
 
 struct CorpusFileResult {

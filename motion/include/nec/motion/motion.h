@@ -41,11 +41,12 @@ struct Motion {
   }
 };
 
-// A skeleton and a motion on it, as read from one file.
+// A skeleton and a motion on it, as read from one file (or one animation of it).
 struct Clip {
   Skeleton skeleton;
   Motion motion;
   std::vector<std::string> warnings;  // what the reader tolerated, e.g. extra lines
+  std::string name{};                 // the animation's name in a file that holds several; "" for BVH
 };
 
 // Reorders the joints of a clip: new joint i is old joint order[i]. Parents

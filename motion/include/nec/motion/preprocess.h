@@ -26,7 +26,12 @@ enum class UpAxis { Auto, Y, Z };
 struct PreprocessOptions {
   double target_fps = 30.0;             // corpus frame rate, e.g. 30; 0 keeps the file's rate
   double max_bone_ratio = 0.9;          // reject a bone longer than this times the diameter (one bone dominating the longest chain)
-  double translation_tolerance = 1e-3;  // non-root position channels varying more than this (× diameter) reject the clip
+  // Non-root position channels are folded into offsets (their mean) when they vary by at most
+  // translation_tolerance × diameter and translation_bone_tolerance × the bone's length (exports jitter
+  // there); more is stretching and rejects the clip, unless fold_any_translation.
+  double translation_tolerance = 0.01;
+  double translation_bone_tolerance = 0.1;
+  bool fold_any_translation = false;
   UpAxis up = UpAxis::Auto;             // the file's up axis; Auto detects Z-up files
   int min_frames = 2;                   // clips shorter than this (after resampling) are rejected
   bool canonical_rest = true;           // re-express in the canonical rest; false keeps the file's rest pose and joint frames
@@ -59,7 +64,7 @@ struct PreparedClip {
 };
 
 PreparedClip preprocess(const Clip& raw, const std::string& file, const PreprocessOptions& options = {});
-// Reads a BVH file and preprocesses it; a file that preprocessing rejects
+// Reads a motion file (read_clip: BVH, or an asset when registered) and preprocesses it; a file that preprocessing rejects
 // throws nec::InputError naming the file and the reason.
 PreparedClip preprocess_file(const std::string& path, const PreprocessOptions& options = {});
 
@@ -67,9 +72,9 @@ PreparedClip preprocess_file(const std::string& path, const PreprocessOptions& o
 // Step 1: the root is a dummy outside the body (named like root/reference or
 // with a single child far away) -> its child becomes the root.
 void merge_dummy_root(Clip& clip, PreprocessReport& report);
-// Step 2: returns false (and sets report.rejection) if a non-root joint's
-// translation varies by more than tolerance × diameter.
-bool fold_joint_translations(Clip& clip, double tolerance, PreprocessReport& report);
+// Step 2: folds non-root position channels into offsets (options' translation_*
+// limits); returns false (and sets report.rejection) for one that stretches more.
+bool fold_joint_translations(Clip& clip, const PreprocessOptions& options, PreprocessReport& report);
 // Step 6: which file axis points up (Y or Z): Z only when the joints named
 // foot/toe hang below the root along Z and not along Y; otherwise Y.
 UpAxis detect_up_axis(const Clip& clip);

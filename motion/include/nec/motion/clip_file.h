@@ -1,0 +1,45 @@
+// Reading motion files of every format nec knows: BVH here, rigged assets
+// (FBX, glTF, Collada, .x) when the assets library has registered its reader.
+// motion/ itself depends on no asset library; `nec` and the tests call
+// nec::assets::register_asset_reader() once at startup.
+//
+//   std::vector<Clip> clips = read_clips("wuson.x");   // one clip per animation, named after it
+//   Clip walk = read_clip("wuson.x#Wuson_Walk");       // one animation of a file
+//   Clip first = read_clip("walk.bvh");
+#pragma once
+
+#include "nec/motion/motion.h"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace nec {
+
+struct ClipReadOptions {
+  double fps = 0.0;  // > 0: the motion's true frame rate, replacing what the file says (BVH Frame Time, asset keys are sampled at it)
+};
+
+// A reader of one family of formats: all the clips (animations) a file holds.
+struct ClipFormat {
+  std::string description;              // e.g. "rigged assets through assimp"
+  std::vector<std::string> extensions;  // lower case, with the dot: ".fbx"
+  std::function<std::vector<Clip>(const std::string& path, const ClipReadOptions& options)> read;
+};
+
+// Adds a format (a later registration of an extension wins).
+void register_clip_format(ClipFormat format);
+// Extensions read by read_clips(): ".bvh" and the registered ones.
+std::vector<std::string> motion_file_extensions();
+bool is_motion_file(const std::string& path);
+
+// Every clip in the file; a BVH file whose Frame Time does not fit its motion
+// gets a warning (motion/frame_rate.h). `path` may name one animation as FILE#NAME (used when
+// FILE#NAME itself is no file). Throws InputError naming the file for an unknown
+// extension, an unreadable file or a missing animation.
+std::vector<Clip> read_clips(const std::string& path, const ClipReadOptions& options = {});
+// The one clip a file holds; of several animations the first, with a warning
+// naming the others (choose one with FILE#NAME).
+Clip read_clip(const std::string& path, const ClipReadOptions& options = {});
+
+}  // namespace nec
