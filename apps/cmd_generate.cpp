@@ -5,6 +5,7 @@
 #include "torch_runtime.h"
 
 #include "nec/gpt/generation.h"
+#include "nec/motion/clip_file.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/viewer/html.h"
@@ -48,7 +49,7 @@ int run_generate(int argc, char** argv) {
                   "segment going on from the one before. --samples K writes OUT_1.bvh ... OUT_K.bvh.");
   cli.positional("CAPTION", "what the motion shows, e.g. \"a dog walks forward\"; several: one segment each", true, true);
   cli.option("--skeleton", "SKELETON", "", "BVH file or rigged asset to generate for (its motion is not used)", true);
-  cli.option("-o", "OUT.bvh", "", "output BVH file", true);
+  cli.option("-o", "OUT", "", "output: .bvh, or .glb (a copy of the skeleton's asset with the motion added)", true);
   cli.option("--model", "GPT_CKPT", "", "GPT checkpoint (from `nec train gpt`); default: models/default/gpt");
   cli.option("--seconds", "S", "auto", "length of each segment (up to 60); auto: the GPT ends it");
   cli.option("--samples", "K", "1", "how many motions to write");
@@ -100,6 +101,7 @@ int run_generate(int argc, char** argv) {
     written.push_back(sidecar_path(path));
   }
   if (!view.empty()) written.push_back(view);
+  check_clip_output(cli.value("-o"), cli.value("--skeleton"));
   for (const std::string& path : written) {
     if (!cli.is_set("--force") && fs::exists(path)) throw InputError(path, 0, "exists; pass --force to overwrite it");
     const fs::path folder = fs::path(path).parent_path();

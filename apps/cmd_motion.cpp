@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <map>
 
 namespace nec::app {
@@ -117,20 +118,33 @@ int run_info(int argc, char** argv) {
 int run_convert(int argc, char** argv) {
   CommandLine cli("nec convert",
                   "Write a motion file as BVH: a BVH file unchanged or with another Euler order, or the armature\n"
-                  "and one animation of a rigged asset (FBX, glTF/GLB, Collada, .x) in metres, +Y up.");
+                  "and one animation of a rigged asset (FBX, glTF/GLB, Collada, .x) in metres, +Y up. With --onto,\n"
+                  "write a copy of that asset (mesh, skin, materials) with IN's motion added as a GLB.");
   cli.positional("IN", "input BVH file or rigged asset (IN#NAME: one animation of an asset)");
-  cli.option("-o", "OUT.bvh", "", "output BVH file", true);
+  cli.option("-o", "OUT", "", "output: .bvh, or .glb with --onto", true);
   cli.option("--order", "ORDER", "keep", "Euler order of every rotated joint: XYZ XZY YXZ YZX ZXY ZYX, or keep");
+  cli.option("--onto", "ASSET", "", "the rigged asset whose skeleton IN's motion is on (e.g. a BVH that nec wrote\n"
+                                    "with --to / --skeleton ASSET): OUT.glb is the asset with that motion added");
   declare_source_fps(cli);
   cli.example("nec convert walk.bvh -o walk_xyz.bvh --order XYZ");
   cli.example("nec convert /usr/share/assimp/models/X/Testwuson.X#Wuson_Walk -o wuson_walk.bvh");
+  cli.example("nec convert dragon_walk.bvh --onto dragon.fbx -o dragon_walk.glb");
   if (!cli.parse(argc, argv)) return 0;
+  const std::string in = cli.positional_value("IN");
+  const std::string out = cli.value("-o");
+  const std::string onto = cli.value("--onto");
+  if (onto.empty() && !is_bvh(out)) throw UsageError("-o " + out + ": only BVH is written without --onto ASSET");
+  if (!onto.empty()) check_clip_output(out, onto);
   BvhWriteOptions options;
   if (cli.value("--order") != "keep") options.euler_order = parse_order_option(cli.value("--order"));
-  const Clip clip = read_clip(cli.positional_value("IN"), read_options(cli));
-  for (const std::string& warning : clip.warnings) fmt::print(stderr, "nec: warning: {}: {}\n", cli.positional_value("IN"), warning);
-  write_bvh(cli.value("-o"), clip.skeleton, clip.motion, options);
-  fmt::print("wrote {} ({} joints, {} frames)\n", cli.value("-o"), clip.skeleton.joint_count(), clip.motion.frame_count);
+  const Clip clip = read_clip(in, read_options(cli));
+  for (const std::string& warning : clip.warnings) fmt::print(stderr, "nec: warning: {}: {}\n", in, warning);
+  if (onto.empty()) {
+    write_bvh(out, clip.skeleton, clip.motion, options);
+  } else {
+    write_clip(out, clip, onto, clip.name.empty() ? std::filesystem::path(in).stem().string() : clip.name);
+  }
+  fmt::print("wrote {} ({} joints, {} frames)\n", out, clip.skeleton.joint_count(), clip.motion.frame_count);
   return 0;
 }
 

@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "model_options.h"
 
+#include "nec/motion/clip_file.h"
 #include "nec/motion/error.h"
 #include "nec/tat/session.h"
 
@@ -85,12 +86,13 @@ int run_decode(int argc, char** argv) {
   cli.positional("TOKENS.json", "token file from `nec encode`");
   cli.option("--skeleton", "TARGET", "", "BVH file or rigged asset whose skeleton receives the motion (its motion is ignored)",
              true);
-  cli.option("-o", "OUT.bvh", "", "output BVH file", true);
+  cli.option("-o", "OUT", "", "output: .bvh, or .glb (a copy of the target asset with the motion added)", true);
   cli.option("--up", "AXIS", "auto", "up axis of the skeleton file: auto, y or z");
   declare_correction_options(cli);
   declare_model_options(cli);
   cli.example("nec decode walk.tokens.json --skeleton dragon.bvh --model runs/tat -o dragon_walk.bvh");
   if (!cli.parse(argc, argv)) return 0;
+  check_clip_output(cli.value("-o"), cli.value("--skeleton"));
   const auto start = std::chrono::steady_clock::now();
   tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const tat::TokenFile tokens = tat::read_tokens(cli.positional_value("TOKENS.json"));
@@ -108,7 +110,7 @@ int run_transfer(int argc, char** argv) {
                   "orders, units and up axis; speed scales with the target's size; it faces and goes where the source does.");
   cli.positional("SRC", "the motion to transfer: BVH file or rigged asset (SRC#NAME: one animation of an asset)");
   cli.option("--to", "TARGET", "", "BVH file or rigged asset whose skeleton receives the motion", true);
-  cli.option("-o", "OUT.bvh", "", "output BVH file", true);
+  cli.option("-o", "OUT", "", "output: .bvh, or .glb (a copy of the target asset with the motion added)", true);
   cli.option("--up", "AXIS", "auto", "up axis of both input files: auto, y or z");
   cli.option("--tokens", "FILE", "", "also write the intermediate tokens here");
   cli.flag("--free-heading", "keep heading and path as decoded (default: turn the output's body and path slowly\n"
@@ -116,7 +118,9 @@ int run_transfer(int argc, char** argv) {
   declare_correction_options(cli);
   declare_model_options(cli);
   cli.example("nec transfer human_wave.bvh --to dragon.bvh --model runs/tat -o dragon_wave.bvh");
+  cli.example("nec transfer walk.bvh --to /usr/share/assimp/models/X/Testwuson.X -o wuson_walk.glb");
   if (!cli.parse(argc, argv)) return 0;
+  check_clip_output(cli.value("-o"), cli.value("--to"));
   const auto start = std::chrono::steady_clock::now();
   tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const std::string& path = cli.positional_value("SRC");

@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
   // map and unmap each one (page faults on every touch). Keep them in the heap.
   mallopt(M_MMAP_THRESHOLD, 1 << 30);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
-  nec::assets::register_asset_reader();  // every command reads FBX / glTF / Collada / .x as well as BVH
+  nec::assets::register_asset_formats();  // every command reads FBX / glTF / Collada / .x as well as BVH
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
     print_overview();
     return argc < 2 ? 2 : 0;

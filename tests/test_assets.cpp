@@ -10,6 +10,9 @@
 
 #include "test_support.h"
 
+#include <assimp/Importer.hpp>
+#include <assimp/scene.h>
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -23,7 +26,7 @@ const std::string kModels = "/usr/share/assimp/models";
 
 class AssetTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { assets::register_asset_reader(); }
+  static void SetUpTestSuite() { assets::register_asset_formats(); }
 };
 
 std::string base64(const std::vector<float>& values) {
@@ -197,6 +200,76 @@ TEST_F(AssetTest, CorpusFoldersTakeAssetsOneEntryPerAnimation) {
   ASSERT_EQ(corpus.entries.size(), 2u);
   EXPECT_EQ(corpus.entries[0].id, files[0].path + "#bend");
   EXPECT_EQ(corpus.entries[1].id, files[0].path + "#wave");
+}
+
+// Scene contents a user's asset must keep: meshes, skinned bones, materials.
+struct SceneCounts {
+  unsigned meshes = 0, bones = 0, materials = 0, animations = 0;
+};
+
+SceneCounts count_scene(const std::string& path) {
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path, 0);
+  EXPECT_NE(scene, nullptr) << path << ": " << importer.GetErrorString();
+  SceneCounts out;
+  if (scene == nullptr) return out;
+  out.meshes = scene->mNumMeshes;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) out.bones += scene->mMeshes[m]->mNumBones;
+  out.materials = scene->mNumMaterials;
+  out.animations = scene->mNumAnimations;
+  return out;
+}
+
+TEST_F(AssetTest, MotionWrittenOntoACopyOfTheAssetReadsBackTheSame) {
+  if (!fs::exists(kModels + "/X/Testwuson.X")) GTEST_SKIP() << "assimp-testmodels is not installed";
+  // A DirectX file with three animations; a Blender FBX in centimetres under an armature scaled x100.
+  for (const std::string asset : {kModels + "/X/Testwuson.X", kModels + "/FBX/huesitos.fbx"}) {
+    SCOPED_TRACE(asset);
+    Clip clip = read_clip(asset);
+    // A motion the asset does not hold: its first animation turned by 90 degrees and moved 2 m.
+    for (int t = 0; t < clip.motion.frame_count; ++t) {
+      clip.motion.rotation(t, 0) = axis_rotation(1, 90.0) * clip.motion.rotation(t, 0);
+      clip.motion.translation(t, 0) = axis_rotation(1, 90.0) * clip.motion.translation(t, 0) + Vec3(2, 0, 0);
+    }
+    testing::TempDir dir;
+    const std::string out = dir / "turned.glb";
+    write_clip(out, clip, asset, "turned");
+    const std::vector<Clip> clips = read_clips(out);
+    const SceneCounts source = count_scene(asset), copy = count_scene(out);
+    ASSERT_EQ(clips.size(), source.animations + 1);  // the new animation first, then the asset's own
+    EXPECT_EQ(clips[0].name, "turned");
+    const Clip& back = clips[0];
+    ASSERT_EQ(back.skeleton.names, clip.skeleton.names);
+    ASSERT_EQ(back.motion.frame_count, clip.motion.frame_count);
+    const Pose written = forward_kinematics(clip.skeleton, clip.motion);
+    const Pose read = forward_kinematics(back.skeleton, back.motion);
+    double worst = 0.0;
+    for (size_t i = 0; i < written.positions.size(); ++i) {
+      worst = std::max(worst, (written.positions[i] - read.positions[i]).norm());
+    }
+    EXPECT_LT(worst, 1e-4 * clip.skeleton.diameter());  // metres and +Y up both ways
+    EXPECT_EQ(copy.meshes, source.meshes);
+    EXPECT_EQ(copy.bones, source.bones);
+    EXPECT_GE(copy.materials, source.materials);
+  }
+}
+
+TEST_F(AssetTest, OutputsNecCannotWriteAreRefusedFirst) {
+  testing::TempDir dir;
+  const std::string gltf = dir.write("chain.gltf", bending_chain_gltf());
+  EXPECT_NO_THROW(check_clip_output(dir / "out.glb", gltf));
+  EXPECT_NO_THROW(check_clip_output(dir / "out.bvh", gltf));
+  EXPECT_NO_THROW(check_clip_output(dir / "out.glb", gltf + "#wave"));
+  for (const auto& [out, target] : std::vector<std::pair<std::string, std::string>>{
+           {dir / "out.fbx", gltf}, {dir / "out.glb", dir / "walk.bvh"}, {dir / "out.glb", ""}}) {
+    try {
+      check_clip_output(out, target);
+      FAIL() << out << " onto '" << target << "'";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(out), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(out));
+  }
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <string_view>
 
 namespace nec::assets {
@@ -310,6 +311,20 @@ Armature find_armature(const aiScene& scene, const std::string& path) {
   }
   read_fbx_axes(scene, a);
   return a;
+}
+
+std::vector<std::string> joint_names(const Armature& armature) {
+  std::vector<std::string> names;
+  std::set<std::string> used;
+  for (int j = 0; j < armature.joint_count(); ++j) {
+    std::string name = armature.joint_name(j);
+    if (name.empty()) name = "joint_" + std::to_string(j);
+    const std::string base = name;
+    for (int k = 2; used.count(name) > 0; ++k) name = base + "_" + std::to_string(k);
+    used.insert(name);
+    names.push_back(std::move(name));
+  }
+  return names;
 }
 
 std::vector<const aiNodeAnim*> node_channels(const Armature& armature, const aiAnimation* animation) {

@@ -43,6 +43,9 @@ struct Armature {
   std::string joint_name(int joint) const { return nodes[joints[joint]].node->mName.C_Str(); }
 };
 
+// The joints' names as nec's Skeleton holds them: the node names, made non-empty and unique.
+std::vector<std::string> joint_names(const Armature& armature);
+
 // Throws InputError naming `path` when the scene has no armature.
 Armature find_armature(const aiScene& scene, const std::string& path);
 

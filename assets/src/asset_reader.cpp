@@ -4,6 +4,8 @@
 
 #include "armature.h"
 
+#include "nec/assets/asset_writer.h"
+
 #include "nec/motion/error.h"
 
 #include <assimp/Importer.hpp>
@@ -12,27 +14,11 @@
 
 #include <cmath>
 #include <filesystem>
-#include <set>
 
 namespace nec::assets {
 namespace {
 
 constexpr double kDefaultFps = 30.0;
-
-// Names nec can write to BVH: non-empty and unique.
-std::vector<std::string> joint_names(const Armature& armature) {
-  std::vector<std::string> names;
-  std::set<std::string> used;
-  for (int j = 0; j < armature.joint_count(); ++j) {
-    std::string name = armature.joint_name(j);
-    if (name.empty()) name = "joint_" + std::to_string(j);
-    const std::string base = name;
-    for (int k = 2; used.count(name) > 0; ++k) name = base + "_" + std::to_string(k);
-    used.insert(name);
-    names.push_back(std::move(name));
-  }
-  return names;
-}
 
 struct WorldPose {
   std::vector<Vec3> positions;  // (J) metres, +Y up
@@ -76,7 +62,8 @@ Clip sample_clip(const Armature& a, const Skeleton& skeleton, const aiAnimation*
     std::tie(first, last) = key_range(*animation);
     tps = ticks_per_second(*animation);
   }
-  const int frames = static_cast<int>(std::floor((last - first) / tps * fps + 1e-6)) + 1;
+  // Key times pass through float (glTF stores seconds as float): a hundredth of a frame short is on the frame.
+  const int frames = static_cast<int>(std::floor((last - first) / tps * fps + 1e-2)) + 1;
   Clip clip;
   clip.skeleton = skeleton;
   clip.motion = Motion::rest(skeleton, frames, fps);
@@ -143,8 +130,10 @@ std::vector<Clip> read_asset(const std::string& path, const ClipReadOptions& opt
   return clips;
 }
 
-void register_asset_reader() {
+void register_asset_formats() {
   register_clip_format({"rigged assets (FBX, glTF, Collada, DirectX) through assimp", asset_extensions(), read_asset});
+  register_clip_writer({"the motion as a new animation on a copy of the asset (GLB)", asset_output_extensions(),
+                        write_animation_onto_asset});
 }
 
 }  // namespace nec::assets

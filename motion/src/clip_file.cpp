@@ -22,6 +22,19 @@ std::vector<ClipFormat>& registry() {
   return formats;
 }
 
+std::vector<ClipWriter>& writers() {
+  static std::vector<ClipWriter> formats;
+  return formats;
+}
+
+template <class Format>
+const Format* find_format(const std::vector<Format>& formats, const std::string& ext) {
+  for (auto it = formats.rbegin(); it != formats.rend(); ++it) {
+    if (std::find(it->extensions.begin(), it->extensions.end(), ext) != it->extensions.end()) return &*it;
+  }
+  return nullptr;
+}
+
 std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -31,11 +44,20 @@ std::string lower_extension(const std::string& path) {
 // The reader of `ext`; nullptr for BVH (read here) or an unknown extension.
 const ClipFormat* format_for(const std::string& ext) {
   std::lock_guard<std::mutex> lock(registry_mutex());
-  const auto& formats = registry();
-  for (auto it = formats.rbegin(); it != formats.rend(); ++it) {
-    if (std::find(it->extensions.begin(), it->extensions.end(), ext) != it->extensions.end()) return &*it;
-  }
-  return nullptr;
+  return find_format(registry(), ext);
+}
+
+const ClipWriter* writer_for(const std::string& ext) {
+  std::lock_guard<std::mutex> lock(registry_mutex());
+  return find_format(writers(), ext);
+}
+
+// FILE#NAME -> {FILE, NAME}; a path that exists as it is, or has no '#', -> {path, ""}.
+std::pair<std::string, std::string> split_animation(const std::string& path) {
+  const size_t hash = path.rfind('#');
+  std::error_code ec;
+  if (hash == std::string::npos || hash == 0 || std::filesystem::exists(path, ec)) return {path, ""};
+  return {path.substr(0, hash), path.substr(hash + 1)};
 }
 
 std::vector<Clip> read_whole_file(const std::string& path, const ClipReadOptions& options) {
@@ -71,6 +93,11 @@ void register_clip_format(ClipFormat format) {
   registry().push_back(std::move(format));
 }
 
+void register_clip_writer(ClipWriter writer) {
+  std::lock_guard<std::mutex> lock(registry_mutex());
+  writers().push_back(std::move(writer));
+}
+
 std::vector<std::string> motion_file_extensions() {
   std::vector<std::string> out{".bvh"};
   std::lock_guard<std::mutex> lock(registry_mutex());
@@ -88,11 +115,8 @@ bool is_motion_file(const std::string& path) {
 }
 
 std::vector<Clip> read_clips(const std::string& path, const ClipReadOptions& options) {
-  const size_t hash = path.rfind('#');
-  std::error_code ec;
-  if (hash == std::string::npos || hash == 0 || std::filesystem::exists(path, ec)) return read_whole_file(path, options);
-  const std::string file = path.substr(0, hash);
-  const std::string wanted = path.substr(hash + 1);
+  const auto [file, wanted] = split_animation(path);
+  if (wanted.empty()) return read_whole_file(path, options);
   std::vector<Clip> clips = read_whole_file(file, options);
   std::string names;
   for (Clip& clip : clips) {
@@ -116,6 +140,36 @@ Clip read_clip(const std::string& path, const ClipReadOptions& options) {
                              first.name + "' (others: " + others + "; choose one with FILE#NAME)");
   }
   return first;
+}
+
+void check_clip_output(const std::string& out, const std::string& target) {
+  const std::string ext = lower_extension(out);
+  if (ext == ".bvh") return;
+  if (writer_for(ext) == nullptr) {
+    std::string known = ".bvh";
+    {
+      std::lock_guard<std::mutex> lock(registry_mutex());
+      for (const ClipWriter& writer : writers()) {
+        for (const std::string& e : writer.extensions) known += " " + e;
+      }
+    }
+    throw InputError(out, 0, "nec does not write '" + ext + "' files (it writes " + known + ")");
+  }
+  const std::string target_file = split_animation(target).first;
+  if (lower_extension(target_file) == ".bvh" || !is_motion_file(target_file)) {
+    throw InputError(out, 0, "a '" + ext + "' output is the target's asset with the motion added; the target " +
+                                 (target.empty() ? std::string("is missing") : "'" + target + "' is no rigged asset") +
+                                 " (write .bvh, or give an FBX / glTF / Collada / .x target)");
+  }
+}
+
+void write_clip(const std::string& out, const Clip& clip, const std::string& target, const std::string& name) {
+  check_clip_output(out, target);
+  if (lower_extension(out) == ".bvh") {
+    write_bvh(out, clip.skeleton, clip.motion);
+    return;
+  }
+  writer_for(lower_extension(out))->write(out, clip, split_animation(target).first, name);
 }
 
 }  // namespace nec

@@ -1,7 +1,7 @@
 // Tokens from BVH files and BVH from tokens, with a loaded tokenizer.
 #include "nec/tat/session.h"
 
-#include "nec/motion/bvh.h"
+#include "nec/motion/clip_file.h"
 #include "nec/motion/error.h"
 #include "nec/motion/rotations.h"
 
@@ -9,6 +9,7 @@
 #include <torch/torch.h>
 
 #include <cmath>
+#include <filesystem>
 
 namespace nec::tat {
 namespace {
@@ -86,6 +87,17 @@ TokenFile encode_file(TokenizerSession& session, const PreparedClip& source, con
   return tokens;
 }
 
+namespace {
+
+// The name of a written animation (in an asset output): the caption of generated tokens, else the source's file.
+std::string animation_name(const TokenFile& tokens) {
+  const std::string generated = "generated: ";
+  if (tokens.source_file.rfind(generated, 0) == 0) return tokens.source_file.substr(generated.size());
+  return std::filesystem::path(tokens.source_file).filename().string();
+}
+
+}  // namespace
+
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path,
                          UpAxis up, const DecodeCorrections& corrections, const std::string& out_path) {
   const TatConfig& config = session.model.tokenizer->config();
@@ -115,7 +127,7 @@ DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, con
   }
   if (corrections.feet) report.feet = lock_feet(out.skeleton, out.motion);
   out = denormalize(out, with_heading(target.normalization, tokens.heading_degrees));
-  write_bvh(out_path, out.skeleton, out.motion);
+  write_clip(out_path, out, target_path, animation_name(tokens));
   return report;
 }
 

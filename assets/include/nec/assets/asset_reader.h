@@ -1,7 +1,7 @@
 // Rigged assets in: the armature and its animations of an FBX, glTF/GLB,
 // Collada or DirectX .x file, read through assimp into nec's Skeleton and Motion.
 //
-//   assets::register_asset_reader();            // once: read_clips() takes these files too
+//   assets::register_asset_formats();           // once: read_clips() takes these files too
 //   std::vector<Clip> clips = read_clips("wuson.x");   // one clip per animation
 //
 // What is read (docs/assets.md has the reasons):
@@ -38,7 +38,8 @@ const std::vector<std::string>& asset_extensions();
 // no armature, or an armature nec cannot express.
 std::vector<Clip> read_asset(const std::string& path, const ClipReadOptions& options = {});
 
-// Registers read_asset() with motion/'s read_clips() for asset_extensions().
-void register_asset_reader();
+// Registers read_asset() with motion/'s read_clips() for asset_extensions(),
+// and write_animation_onto_asset() with write_clip() (asset_writer.h).
+void register_asset_formats();
 
 }  // namespace nec::assets

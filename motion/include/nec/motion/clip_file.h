@@ -1,11 +1,12 @@
-// Reading motion files of every format nec knows: BVH here, rigged assets
-// (FBX, glTF, Collada, .x) when the assets library has registered its reader.
-// motion/ itself depends on no asset library; `nec` and the tests call
-// nec::assets::register_asset_reader() once at startup.
+// Reading and writing motion files of every format nec knows: BVH here,
+// rigged assets (FBX, glTF, Collada, .x in; GLB out) when the assets library
+// has registered them. motion/ itself depends on no asset library; `nec` and
+// the tests call nec::assets::register_asset_formats() once at startup.
 //
 //   std::vector<Clip> clips = read_clips("wuson.x");   // one clip per animation, named after it
 //   Clip walk = read_clip("wuson.x#Wuson_Walk");       // one animation of a file
 //   Clip first = read_clip("walk.bvh");
+//   write_clip("dragon_walk.glb", out, "dragon.fbx", "walk");  // onto a copy of the asset
 #pragma once
 
 #include "nec/motion/motion.h"
@@ -29,6 +30,15 @@ struct ClipFormat {
 
 // Adds a format (a later registration of an extension wins).
 void register_clip_format(ClipFormat format);
+
+// A writer of an asset format: `clip` (on the skeleton read from the asset
+// `target`) as a new animation named `name` on a copy of `target`, to `out`.
+struct ClipWriter {
+  std::string description;
+  std::vector<std::string> extensions;  // lower case, with the dot: ".glb"
+  std::function<void(const std::string& out, const Clip& clip, const std::string& target, const std::string& name)> write;
+};
+void register_clip_writer(ClipWriter writer);
 // Extensions read by read_clips(): ".bvh" and the registered ones.
 std::vector<std::string> motion_file_extensions();
 bool is_motion_file(const std::string& path);
@@ -41,5 +51,13 @@ std::vector<Clip> read_clips(const std::string& path, const ClipReadOptions& opt
 // The one clip a file holds; of several animations the first, with a warning
 // naming the others (choose one with FILE#NAME).
 Clip read_clip(const std::string& path, const ClipReadOptions& options = {});
+
+// Throws InputError, before any work is done, when `out` cannot be written:
+// an extension nec does not write, or an asset output whose `target` (the
+// skeleton's file) is no asset.
+void check_clip_output(const std::string& out, const std::string& target);
+// BVH for .bvh (atomic); a registered asset format onto `target`, the
+// animation named `name`.
+void write_clip(const std::string& out, const Clip& clip, const std::string& target, const std::string& name);
 
 }  // namespace nec

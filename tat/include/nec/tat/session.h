@@ -69,9 +69,10 @@ struct DecodeReport {
 };
 
 // Decodes tokens onto the skeleton of `target_path`, applies `corrections` in
-// their order above, and writes `out_path` in that file's units, up axis,
-// joint names, channels and Euler orders. InputError when the tokens do not
-// fit the model.
+// their order above, and writes `out_path` (motion/clip_file.h): BVH in that
+// file's units, up axis, joint names, channels and Euler orders, or a GLB copy
+// of a target asset with the motion as a new animation. InputError when the
+// tokens do not fit the model or the output cannot be written onto the target.
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path, UpAxis up,
                          const DecodeCorrections& corrections, const std::string& out_path);
 
