@@ -21,15 +21,21 @@
 #       Generation: a 4-s motion from text to BVH on disk with the default GPT
 #       (one sample, goal < 0.5 s; 32 samples, goal < 3 s), and sampled tokens
 #       per second with and without the KV cache at 4, 16 and 64 s.
+#   scripts/bench.sh assets
+#       Rigged assets: reading FBX and GLB (assimp) against reading BVH, on the
+#       Debian CMU files and a zoo dragon exported by Blender 3.4
+#       (tests/interop/blender_export_assets.py; installs blender), frames/s and
+#       MB/s; and writing a motion onto an asset as GLB (ms).
 # Raw results in build-bench/: bench_motion.json, peer_threejs.json,
-# bench_tat_step{1,2}.json, peer_tat_step{1,2}.json, bench_tat_clip.json, bench_evaluator.json, bench_gpt.json
+# bench_tat_step{1,2}.json, peer_tat_step{1,2}.json, bench_tat_clip.json, bench_evaluator.json, bench_gpt.json,
+# bench_assets.json
 # (NEC_BENCH_BUILD=DIR builds and writes in DIR instead).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 section=all
 case "${1:-}" in
-  motion | tat | evaluator | gpt) section=$1; shift ;;
+  motion | tat | evaluator | gpt | assets) section=$1; shift ;;
 esac
 if [ "$section" != motion ] && [ "$section" != all ] && [ $# -gt 0 ]; then
   echo "bench.sh: '$section' takes no arguments" >&2
@@ -257,8 +263,50 @@ print()
 PY
 }
 
+bench_assets() {
+  ensure_packages bench blender assimp-testmodels
+  cmake --build "$build" --target bench_assets nec
+  local data="$build"/bench_assets_data
+  rm -rf "$data"
+  mkdir -p "$data"
+  cp /usr/share/assimp/models/BVH/*.bvh "$data"/
+  "$build"/apps/nec zoo --out "$data"/zoo --creatures 9 --clips-per-creature 1 --seconds 8 --seed 1 --quiet >/dev/null
+  cp "$(find "$data"/zoo -name '*.bvh' -path '*dragon*' | sort | head -n 1)" "$data"/dragon.bvh
+  blender -b --factory-startup --python-exit-code 1 --python tests/interop/blender_export_assets.py -- \
+    "$data" "$data"/*.bvh >"$build"/bench_assets_blender.log 2>&1
+  "$build"/benchmarks/bench_assets --benchmark_format=console \
+    --benchmark_out="$build"/bench_assets.json --benchmark_out_format=json "$data" >/dev/null
+  "$python" - "$build"/bench_assets.json "$data" <<'PY'
+import json, os, sys
+rows = json.load(open(sys.argv[1]))["benchmarks"]
+def median(name, field):
+    found = [r for r in rows if r["run_name"].split("/min_time")[0] == name and r.get("aggregate_name") == "median"]
+    return found[0][field] if found else float("nan")
+stems = sorted(f[:-4] for f in os.listdir(sys.argv[2]) if f.endswith(".bvh"))
+print(f"""
+Median of 5 repetitions, one thread; {len(stems)} motions ({", ".join(stems)}), each as BVH and as Blender 3.4's FBX
+and GLB; frames are the BVH's (assets sampled at its rate); 1 MB = 10^6 bytes of each format's files.
+
+| read | frames/s | MB/s | frames/s vs BVH |
+|---|---:|---:|---:|""")
+bvh = median("BM_ReadBvh", "frames_per_s")
+for name, label in (("BM_ReadBvh", "BVH (nec's reader)"), ("BM_ReadFbx", "FBX (assimp + nec)"), ("BM_ReadGlb", "GLB (assimp + nec)")):
+    fps = median(name, "frames_per_s")
+    print(f"| {label} | {fps:,.0f} | {median(name, 'bytes_per_second') / 1e6:.1f} | {fps / bvh:.2f} |")
+print("""
+| write a motion onto an asset as GLB | joints | frames | ms |
+|---|---:|---:|---:|""")
+for r in rows:
+    if r["run_name"].startswith("BM_WriteGlbOntoAsset") and r.get("aggregate_name") == "median":
+        asset = r["run_name"].split("/min_time")[0][len("BM_WriteGlbOntoAsset/"):]
+        print(f"| {asset} | {r['joints']:.0f} | {r['frames']:.0f} | {r['real_time']:.1f} |")
+print()
+PY
+}
+
 case "$section" in
   motion) bench_motion "$@" ;;
+  assets) bench_assets ;;
   tat) bench_tat ;;
   evaluator) bench_evaluator ;;
   gpt) bench_gpt ;;

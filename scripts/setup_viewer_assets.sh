@@ -13,6 +13,8 @@
 # embeds these files from there into the nec binary at build time
 # (viewer/CMakeLists.txt):
 #   build/three.module.min.js, examples/jsm/loaders/BVHLoader.js,
+#   examples/jsm/loaders/GLTFLoader.js (+ utils/BufferGeometryUtils.js, which it
+#   imports: rigged assets show their skinned mesh),
 #   examples/jsm/controls/OrbitControls.js   (+ LICENSE, three.js is MIT)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,7 +23,8 @@ version=0.170.0
 # npm view three@0.170.0 dist.integrity, in hex
 sha512=1502be2c4a587347c10fe27c83aa12132c8dce3a7e43b2acd42e7af1659aa0c44b5be4e434d5a67a759e1a0263575d3919dfa9ff6aa5d5972362f3623d9061b9
 dest=third_party_cache/three-$version
-files=(build/three.module.min.js examples/jsm/loaders/BVHLoader.js examples/jsm/controls/OrbitControls.js LICENSE)
+files=(build/three.module.min.js examples/jsm/loaders/BVHLoader.js examples/jsm/loaders/GLTFLoader.js
+       examples/jsm/utils/BufferGeometryUtils.js examples/jsm/controls/OrbitControls.js LICENSE)
 
 source scripts/lib.sh
 

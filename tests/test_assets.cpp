@@ -223,7 +223,7 @@ SceneCounts count_scene(const std::string& path) {
 TEST_F(AssetTest, MotionWrittenOntoACopyOfTheAssetReadsBackTheSame) {
   if (!fs::exists(kModels + "/X/Testwuson.X")) GTEST_SKIP() << "assimp-testmodels is not installed";
   // A DirectX file with three animations; a Blender FBX in centimetres under an armature scaled x100.
-  for (const std::string asset : {kModels + "/X/Testwuson.X", kModels + "/FBX/huesitos.fbx"}) {
+  for (const std::string& asset : {kModels + "/X/Testwuson.X", kModels + "/FBX/huesitos.fbx"}) {
     SCOPED_TRACE(asset);
     Clip clip = read_clip(asset);
     // A motion the asset does not hold: its first animation turned by 90 degrees and moved 2 m.

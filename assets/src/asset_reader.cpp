@@ -133,7 +133,7 @@ std::vector<Clip> read_asset(const std::string& path, const ClipReadOptions& opt
 void register_asset_formats() {
   register_clip_format({"rigged assets (FBX, glTF, Collada, DirectX) through assimp", asset_extensions(), read_asset});
   register_clip_writer({"the motion as a new animation on a copy of the asset (GLB)", asset_output_extensions(),
-                        write_animation_onto_asset});
+                        animation_onto_asset});
 }
 
 }  // namespace nec::assets

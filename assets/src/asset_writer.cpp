@@ -4,7 +4,6 @@
 #include "armature.h"
 
 #include "nec/motion/error.h"
-#include "nec/motion/files.h"
 #include "nec/motion/kinematics.h"
 
 #include <assimp/Exporter.hpp>
@@ -127,6 +126,19 @@ aiAnimation* make_animation(const Armature& a, const std::vector<std::vector<Mat
   return animation.release();
 }
 
+// `name`, or with a number appended if the asset has an animation of that name (glTF's exporter needs them distinct).
+std::string unused_animation_name(const aiScene& scene, const std::string& name) {
+  auto used = [&](const std::string& candidate) {
+    for (unsigned i = 0; i < scene.mNumAnimations; ++i) {
+      if (candidate == scene.mAnimations[i]->mName.C_Str()) return true;
+    }
+    return false;
+  };
+  std::string out = name;
+  for (int k = 2; used(out); ++k) out = name + "_" + std::to_string(k);
+  return out;
+}
+
 // Puts `animation` first among the scene's animations (the scene owns it after).
 void add_first(aiScene& scene, aiAnimation* animation) {
   auto** all = new aiAnimation*[scene.mNumAnimations + 1];
@@ -158,8 +170,7 @@ const std::vector<std::string>& asset_output_extensions() {
   return extensions;
 }
 
-void write_animation_onto_asset(const std::string& out, const Clip& clip, const std::string& asset,
-                                const std::string& name) {
+std::string animation_onto_asset(const Clip& clip, const std::string& asset, const std::string& name) {
   Assimp::Importer importer;
   importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);  // as the reader: the same nodes
   if (importer.ReadFile(asset, 0) == nullptr) {
@@ -168,14 +179,12 @@ void write_animation_onto_asset(const std::string& out, const Clip& clip, const 
   const std::unique_ptr<aiScene> scene(importer.GetOrphanedScene());
   const Armature armature = find_armature(*scene, asset);
   add_first(*scene, make_animation(armature, joint_world_transforms(armature, clip, asset), clip.motion.fps,
-                                   name.empty() ? std::string("nec") : name));
+                                   unused_animation_name(*scene, name.empty() ? std::string("nec") : name)));
   convert_to_metres_y_up(*scene, armature);
   Assimp::Exporter exporter;
   const aiExportDataBlob* blob = exporter.ExportToBlob(scene.get(), "glb2", 0);
-  if (blob == nullptr) {
-    throw std::runtime_error(out + ": the glTF exporter failed: " + exporter.GetErrorString());
-  }
-  write_file_atomic(out, std::string_view(static_cast<const char*>(blob->data), blob->size));
+  if (blob == nullptr) throw std::runtime_error(asset + ": the glTF exporter failed: " + exporter.GetErrorString());
+  return std::string(static_cast<const char*>(blob->data), blob->size);
 }
 
 }  // namespace nec::assets

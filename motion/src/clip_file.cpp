@@ -3,6 +3,7 @@
 
 #include "nec/motion/bvh.h"
 #include "nec/motion/error.h"
+#include "nec/motion/files.h"
 #include "nec/motion/frame_rate.h"
 
 #include <algorithm>
@@ -169,7 +170,15 @@ void write_clip(const std::string& out, const Clip& clip, const std::string& tar
     write_bvh(out, clip.skeleton, clip.motion);
     return;
   }
-  writer_for(lower_extension(out))->write(out, clip, split_animation(target).first, name);
+  write_file_atomic(out, writer_for(lower_extension(out))->encode(clip, split_animation(target).first, name));
+}
+
+std::string encode_clip_onto_asset(const std::string& ext, const Clip& clip, const std::string& target,
+                                   const std::string& name) {
+  const ClipWriter* writer = writer_for(ext);
+  const std::string target_file = split_animation(target).first;
+  if (writer == nullptr || lower_extension(target_file) == ".bvh" || !is_motion_file(target_file)) return "";
+  return writer->encode(clip, target_file, name);
 }
 
 }  // namespace nec

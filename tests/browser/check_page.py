@@ -4,7 +4,7 @@
   check_page.py --dom DOM.html --expected EXPECTED.tsv --time SECONDS --screenshot VIEW.png --logs LOG...
                 [--caption TEXT]
 
-EXPECTED.tsv: name, joints, end sites, frames, fps per clip, as `nec info`
+EXPECTED.tsv: name, joints, end sites, frames, fps, asset (1: shown with its mesh) per clip, as `nec info`
 reads them; SECONDS: the time the page was opened at (view.html#t=SECONDS).
 Prints one line per clip and per check; exit status 1 when any fails.
 """
@@ -17,6 +17,7 @@ import sys
 import zlib
 
 REFERENCE_TOLERANCE = 1e-4  # joint positions vs nec's forward kinematics, in body sizes
+MESH_TOLERANCE = 1e-3       # an asset's bones (three.js GLTFLoader + AnimationMixer) vs nec's joints, in body sizes
 
 
 def page_status(dom):
@@ -96,7 +97,7 @@ def main():
     loaded = status.get("clips", [])
     if len(loaded) != len(expected):
         problems.append(f"page loaded {len(loaded)} clips, expected {len(expected)}")
-    for (name, joints, end_sites, frames, fps), clip in zip(expected, loaded):
+    for (name, joints, end_sites, frames, fps, asset), clip in zip(expected, loaded):
         frames, fps = int(frames), float(fps)
         shown = round(min(args.time, (frames - 1) / fps) * fps)
         want = {"name": name, "joints": int(joints), "end_sites": int(end_sites), "frames": frames, "frame": shown}
@@ -109,6 +110,13 @@ def main():
             problems.append(f"{name}: page loaded {got}, nec reads {want}")
         if not (clip.get("reference_error", 1) <= REFERENCE_TOLERANCE):
             problems.append(f"{name}: joints {clip.get('reference_error')} body sizes from nec's FK")
+        if asset == "1":
+            print(f"browser: {name}: {clip.get('skinned_meshes')} skinned mesh(es), bones within "
+                  f"{clip.get('mesh_error')} body sizes of nec's joints")
+            if not clip.get("skinned_meshes"):
+                problems.append(f"{name}: the asset's skinned mesh did not load")
+            if not (clip.get("mesh_error", 1) <= MESH_TOLERANCE):
+                problems.append(f"{name}: the asset's bones {clip.get('mesh_error')} body sizes from nec's joints")
     if args.caption and html.escape(args.caption) not in dom:
         problems.append(f"caption {args.caption!r} is not in the page")
 

@@ -5,7 +5,9 @@
 #
 # Without clips it takes Debian's CMU files 01_01 (copied next to a clip.txt
 # caption sidecar) and Boxing_Toes, plus 01_01 normalized by nec (diameter 1,
-# a size very different from the CMU centimetres). For each page: Chromium
+# a size very different from the CMU centimetres), and the rigged asset
+# Testwuson.X (its Wuson_Walk): three.js's GLTFLoader must load its skinned
+# mesh, whose bones must move within 1e-3 body sizes of nec's joints. For each page: Chromium
 # (--dump-dom) must report state "ready" with no errors in the page's status
 # block, every clip with the joints, end sites and frames of `nec info`, joint
 # positions within 1e-4 body sizes of nec's forward kinematics, every joint in
@@ -49,16 +51,22 @@ if [ ${#clips[@]} -eq 0 ]; then
   printf '%s\n' "$caption" > "$work/jump.txt"
   "$nec" normalize "$cmu/01_01.bvh" -o "$work/jump_normalized.bvh" >/dev/null
   clips=("$work/jump.bvh" "$cmu/Boxing_Toes.bvh" "$work/jump_normalized.bvh")
+  # A rigged asset: its skinned mesh must load in three.js's GLTFLoader and move with nec's joints.
+  wuson=/usr/share/assimp/models/X/Testwuson.X
+  [ -f "$wuson" ] && clips+=("$wuson#Wuson_Walk")
 fi
 
-# What nec reads: name, joints, end sites, frames, fps per clip.
+# What nec reads: name, joints, end sites, frames, fps per clip, and whether it is an asset (shown with its mesh).
 expected="$work/expected.tsv"
 : > "$expected"
 for clip in "${clips[@]}"; do
   info=$("$nec" info --no-tree "$clip")
   joints=$(sed -nE 's/^joints +([0-9]+) \(([0-9]+) end sites.*/\1\t\2/p' <<< "$info")
-  frames=$(sed -nE 's/^frames +([0-9]+) at ([0-9.e+-]+) fps.*/\1\t\2/p' <<< "$info")
-  printf '%s\t%s\t%s\n' "$(basename "$clip" .bvh)" "$joints" "$frames" >> "$expected"
+  frames=$(sed -nE "s/^(frames +|animation '.*': )([0-9]+)( frames)? at ([0-9.e+-]+) fps.*/\2\t\4/p" <<< "$info")
+  file=$(basename "${clip%%#*}")
+  asset=1
+  [ "${file##*.}" = bvh ] && asset=0
+  printf '%s\t%s\t%s\t%s\n' "${file%.*}" "$joints" "$frames" "$asset" >> "$expected"
 done
 
 page="$work/view.html"

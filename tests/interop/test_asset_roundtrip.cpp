@@ -98,7 +98,7 @@ TEST(AssetRoundTrip, BlenderImportsMotionWrittenOntoAnAsset) {
   assets::register_asset_formats();
   testing::TempDir dir;
   const std::string models = "/usr/share/assimp/models";
-  for (const std::string asset : {models + "/X/Testwuson.X", models + "/X/BCN_Epileptic.X", models + "/FBX/huesitos.fbx"}) {
+  for (const std::string& asset : {models + "/X/Testwuson.X", models + "/X/BCN_Epileptic.X", models + "/FBX/huesitos.fbx"}) {
     if (!fs::exists(asset)) GTEST_SKIP() << "assimp-testmodels is not installed";
     // The asset's own first animation, turned by 90 degrees and moved 1 m: a motion the file does not hold.
     Clip clip = read_clip(asset);

@@ -1,8 +1,9 @@
 // nec view player: BVH clips side by side as skeletons, with play/pause, scrub, speed, orbit camera,
-// a caption under each clip and a ground grid. The page's bootstrap links 'three', 'nec:BVHLoader' and
-// 'nec:OrbitControls' to the embedded three.js modules; the clips come from the page's JSON block
-// (#nec-clips: name, captions, joints, end_sites, frames, fps, sides and translated per joint, bvh = id
-// of the BVH text block, reference = nec's joint positions at a few frames).
+// a caption under each clip and a ground grid. The page's bootstrap links 'three', 'nec:BVHLoader',
+// 'nec:GLTFLoader' and 'nec:OrbitControls' to the embedded three.js modules; the clips come from the
+// page's JSON block (#nec-clips: name, captions, joints, end_sites, frames, fps, sides and translated per
+// joint, bvh = id of the BVH text block, reference = nec's joint positions at a few frames, and for a
+// rigged asset mesh = id of a GLB whose first animation is the clip: its skinned mesh moves with the bones).
 //
 // Layout: each clip is scaled so that its largest pose extent over the motion is BODY_SIZE, stands on
 // the ground (its lowest point over the motion at y = 0) and gets its own lane along x, as wide as its
@@ -11,6 +12,7 @@
 // hold their last frame until the longest one loops; `view.html#t=2.5` opens paused at 2.5 s.
 import * as THREE from 'three';
 import { BVHLoader } from 'nec:BVHLoader';
+import { GLTFLoader } from 'nec:GLTFLoader';
 import { OrbitControls } from 'nec:OrbitControls';
 
 const BODY_SIZE = 1.0;         // scene units: the largest pose extent of every clip after scaling
@@ -26,7 +28,14 @@ const CLIP_COLORS = [0x414857, 0x6b5233, 0x2f6048, 0x633a66, 0x2e5a6b];  // join
 
 const status = window.necStatus;
 
-function loadClip(meta, index) {
+// The clip's asset as three.js loads a GLB (null without one).
+function parseMesh(meta) {
+  if (!meta.mesh) return Promise.resolve(null);
+  const bytes = window.necBytes(meta.mesh);
+  return new Promise((resolve, reject) => new GLTFLoader().parse(bytes.buffer, '', resolve, reject));
+}
+
+function loadClip(meta, index, gltf) {
   const { skeleton, clip } = new BVHLoader().parse(window.necText(meta.bvh));
   const bones = skeleton.bones;  // file order: joints and end sites
   const tracks = clip.tracks;    // per joint: position, quaternion
@@ -162,15 +171,45 @@ function loadClip(meta, index) {
   group.add(trail);
 
   const duration = frames > 1 ? (frames - 1) / fps : 0;
+  const mesh = gltf ? attachMesh(gltf, meta, group, joints, size, fps) : null;
   return {
-    meta, group, bones, joints, frames, fps, duration, scale, low, high, referenceError,
+    meta, group, bones, joints, frames, fps, duration, scale, low, high, referenceError, mesh,
     endSites: bones.length - joints.length,
     show(time) {
       this.frame = Math.min(time, duration) * fps;
       setPose(this.frame);
       updateLinks();
+      if (mesh) mesh.mixer.setTime(Math.min(time, duration));
     },
   };
+}
+
+// The asset's scene (in the clip's units and axes, as nec reads the GLB) under the clip's group, played by
+// an AnimationMixer; how far its bones are from nec's joints at the reference frames, relative to the body size.
+function attachMesh(gltf, meta, group, joints, size, fps) {
+  const model = gltf.scene;
+  if (meta.up === 'z') model.rotation.x = -Math.PI / 2;  // as nec turned the clip
+  group.add(model);
+  let skinned = 0;
+  model.traverse((object) => { if (object.isSkinnedMesh) ++skinned; });
+  const mixer = new THREE.AnimationMixer(model);
+  if (gltf.animations.length === 0) throw new Error(`${meta.name}: the asset's GLB holds no animation`);
+  mixer.clipAction(gltf.animations[0]).play();
+  const nodes = joints.map((bone) => model.getObjectByName(THREE.PropertyBinding.sanitizeNodeName(bone.name)));
+  const world = new THREE.Vector3();
+  let error = 0;
+  let compared = 0;
+  for (const { frame, positions: expected } of meta.reference) {
+    mixer.setTime(frame / fps);
+    group.updateMatrixWorld(true);
+    nodes.forEach((node, k) => {
+      if (!node) return;
+      group.worldToLocal(node.getWorldPosition(world));
+      error = Math.max(error, world.distanceTo(new THREE.Vector3(...expected[k])) / size);
+      ++compared;
+    });
+  }
+  return { mixer, skinned, error, compared };
 }
 
 // Lanes along x, each clip standing on y = 0 and centred on its footprint.
@@ -282,9 +321,10 @@ function placeLabels(labels) {
   }
 }
 
-function main() {
+async function main() {
   const metas = JSON.parse(window.necText('nec-clips'));
-  const clips = metas.map(loadClip);
+  const meshes = await Promise.all(metas.map(parseMesh));
+  const clips = metas.map((meta, index) => loadClip(meta, index, meshes[index]));
   for (const clip of clips) {
     const loaded = { joints: clip.joints.length, end_sites: clip.endSites, frames: clip.frames };
     for (const key of Object.keys(loaded)) {
@@ -292,6 +332,9 @@ function main() {
     }
     if (!(clip.referenceError <= 1e-4)) {
       window.necFail(`${clip.meta.name}: joints are drawn up to ${clip.referenceError} body sizes away from nec's forward kinematics`);
+    }
+    if (clip.mesh && !(clip.mesh.compared > 0 && clip.mesh.error <= 1e-3)) {
+      window.necFail(`${clip.meta.name}: the asset's bones move up to ${clip.mesh.error} body sizes away from nec's joints (${clip.mesh.compared} compared)`);
     }
   }
 
@@ -383,6 +426,7 @@ function main() {
         frame: Math.round(clip.frame), time: Number(time.toFixed(4)),
         fps: Number(clip.fps.toFixed(4)), scale: Number(clip.scale.toPrecision(4)),
         reference_error: Number(clip.referenceError.toPrecision(3)),
+        ...(clip.mesh ? { skinned_meshes: clip.mesh.skinned, mesh_error: Number(clip.mesh.error.toPrecision(3)) } : {}),
       }));
       window.necReport();
     }
@@ -391,8 +435,4 @@ function main() {
   requestAnimationFrame(tick);
 }
 
-try {
-  main();
-} catch (error) {
-  window.necFail(error && error.stack ? error.stack : error);
-}
+main().catch((error) => window.necFail(error && error.stack ? error.stack : error));

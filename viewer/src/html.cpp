@@ -122,11 +122,12 @@ void ViewOptions::validate() const {
   if (!(max_fps >= 0.0) || !std::isfinite(max_fps)) throw std::invalid_argument("view max fps must be >= 0");
 }
 
-ViewClip load_view_clip(const std::string& bvh_path) {
+ViewClip load_view_clip(const std::string& path) {
   ViewClip out;
-  out.clip = read_clip(bvh_path);
-  out.name = std::filesystem::path(bvh_path).stem().string();
-  out.captions = captions_for(bvh_path);
+  out.clip = read_clip(path);
+  out.name = std::filesystem::path(path).stem().string();
+  out.captions = captions_for(path);
+  out.mesh_glb = encode_clip_onto_asset(".glb", out.clip, path, out.clip.name.empty() ? out.name : out.clip.name);
   return out;
 }
 
@@ -186,6 +187,11 @@ std::string make_view_html(const std::vector<ViewClip>& clips, const ViewOptions
                          {"reference", reference},
                          {"bvh", id}});
     blocks += script_block(id, "text/plain", format_bvh(skeleton, clip.motion));
+    if (!clips[i].mesh_glb.empty()) {  // binary: always base64
+      described.back()["mesh"] = "nec-mesh-" + std::to_string(i);
+      blocks += "<script type=\"application/octet-stream\" id=\"nec-mesh-" + std::to_string(i) +
+                "\" data-encoding=\"base64\">" + base64(clips[i].mesh_glb) + "</script>\n";
+    }
   }
 
   std::string data = script_block("nec-clips", "application/json", script_safe_json(described));
@@ -194,6 +200,8 @@ std::string make_view_html(const std::vector<ViewClip>& clips, const ViewOptions
           comment_safe(asset("three.LICENSE")) + "-->\n";
   data += script_block("nec-module-three", "text/plain", asset("three.module.min.js"));
   data += script_block("nec-module-bvhloader", "text/plain", asset("BVHLoader.js"));
+  data += script_block("nec-module-gltfloader", "text/plain", asset("GLTFLoader.js"));
+  data += script_block("nec-module-buffergeometryutils", "text/plain", asset("BufferGeometryUtils.js"));
   data += script_block("nec-module-orbitcontrols", "text/plain", asset("OrbitControls.js"));
   data += script_block("nec-module-app", "text/plain", asset("view.js"));
   return fill_template(asset("view.html"), {{"@@TITLE@@", escape_html(options.title)}, {"@@DATA@@", data}});

@@ -39,7 +39,7 @@ const std::vector<std::string>& asset_extensions();
 std::vector<Clip> read_asset(const std::string& path, const ClipReadOptions& options = {});
 
 // Registers read_asset() with motion/'s read_clips() for asset_extensions(),
-// and write_animation_onto_asset() with write_clip() (asset_writer.h).
+// and animation_onto_asset() with write_clip() (asset_writer.h).
 void register_asset_formats();
 
 }  // namespace nec::assets

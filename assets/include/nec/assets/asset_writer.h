@@ -3,11 +3,12 @@
 // new animation, written as GLB through assimp's glTF 2 exporter.
 //
 //   Clip out = ...;                                  // on the skeleton read_clip("dragon.fbx") gives
-//   assets::write_animation_onto_asset("dragon_walk.glb", out, "dragon.fbx", "walk");
+//   write_file_atomic("dragon_walk.glb", assets::animation_onto_asset(out, "dragon.fbx", "walk"));
 //
 // The clip's joints are matched to the armature's by name; armature joints the
 // clip lacks (a dummy root that preprocessing merged) keep their rest transform
-// relative to their parent. The new animation comes first, so that viewers that
+// relative to their parent. The new animation comes first (named `name`, with
+// "_2" ... appended if the asset has one of that name), so that viewers that
 // play one animation play it; keys at every frame of the clip.
 #pragma once
 
@@ -25,7 +26,7 @@ const std::vector<std::string>& asset_output_extensions();
 // joint of its armature, or a clip whose rest pose is not the asset's (a bone
 // more than 5° off: its rotations would bend the asset); std::runtime_error
 // when the export fails.
-void write_animation_onto_asset(const std::string& out, const Clip& clip, const std::string& asset,
-                                const std::string& name);
+// Returns the GLB file's bytes.
+std::string animation_onto_asset(const Clip& clip, const std::string& asset, const std::string& name);
 
 }  // namespace nec::assets

@@ -31,12 +31,12 @@ struct ClipFormat {
 // Adds a format (a later registration of an extension wins).
 void register_clip_format(ClipFormat format);
 
-// A writer of an asset format: `clip` (on the skeleton read from the asset
-// `target`) as a new animation named `name` on a copy of `target`, to `out`.
+// A writer of an asset format: the bytes of a copy of the asset `target`
+// with `clip` (on the skeleton read from `target`) as a new animation named `name`.
 struct ClipWriter {
   std::string description;
   std::vector<std::string> extensions;  // lower case, with the dot: ".glb"
-  std::function<void(const std::string& out, const Clip& clip, const std::string& target, const std::string& name)> write;
+  std::function<std::string(const Clip& clip, const std::string& target, const std::string& name)> encode;
 };
 void register_clip_writer(ClipWriter writer);
 // Extensions read by read_clips(): ".bvh" and the registered ones.
@@ -59,5 +59,9 @@ void check_clip_output(const std::string& out, const std::string& target);
 // BVH for .bvh (atomic); a registered asset format onto `target`, the
 // animation named `name`.
 void write_clip(const std::string& out, const Clip& clip, const std::string& target, const std::string& name);
+// The bytes write_clip() would write to a file with extension `ext` (".glb"):
+// "" when no writer of `ext` is registered or `target` is no asset.
+std::string encode_clip_onto_asset(const std::string& ext, const Clip& clip, const std::string& target,
+                                   const std::string& name);
 
 }  // namespace nec

@@ -4,8 +4,9 @@
 //   write_file_atomic("view.html", make_view_html(clips, ViewOptions{}));
 //
 // The page holds everything it needs and opens from file:// without network:
-// each clip as BVH text (written by nec's BVH writer, +Y up), three.js with
-// its BVHLoader and OrbitControls (embedded into nec at build time, see
+// each clip as BVH text (written by nec's BVH writer, +Y up), a rigged asset's
+// GLB (its skinned mesh moves with the bones), three.js with its BVHLoader,
+// GLTFLoader and OrbitControls (embedded into nec at build time, see
 // viewer/CMakeLists.txt), and the player (viewer/assets/view.js): skeletons
 // with bones, play/pause, scrub, speed, orbit camera, the (first) caption
 // under each clip and a ground grid. Every clip is scaled to the same body
@@ -30,6 +31,7 @@ struct ViewClip {
   std::string name;                   // shown above the caption, e.g. "01_01"
   std::vector<std::string> captions;  // shown under the skeleton, one line each; may be empty
   Clip clip;
+  std::string mesh_glb{};             // a GLB whose first animation is `clip`: its skinned mesh is shown moving; may be empty
 };
 
 struct ViewOptions {
@@ -47,10 +49,11 @@ class ViewerUnavailable : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Reads a BVH file (InputError on bad input); the name is the file name
-// without .bvh and the captions those of nec::captions_for (the `clip.txt`
-// sidecar next to the file, else the Bandai labels).
-ViewClip load_view_clip(const std::string& bvh_path);
+// Reads a motion file (read_clip; InputError on bad input); the name is the
+// file name without extension and the captions those of nec::captions_for (the
+// `clip.txt` sidecar next to the file, else the Bandai labels). A rigged asset
+// also gets mesh_glb (when a GLB writer is registered: motion/clip_file.h).
+ViewClip load_view_clip(const std::string& path);
 
 // Whether three.js was embedded into this build, and its npm version ("" when not).
 bool have_three();
