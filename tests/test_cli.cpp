@@ -139,6 +139,42 @@ TEST_F(Cli, ViewWritesAStripAndRejectsBadArguments) {
   EXPECT_FALSE(fs::exists(path("x.png")));
 }
 
+// Rigged assets through the commands: described, converted to BVH and back onto the asset, prepared
+// with BVH files, and the outputs nec cannot write refused with nothing written.
+TEST_F(Cli, AssetsInAndOutThroughTheCommands) {
+  const std::string wuson = "/usr/share/assimp/models/X/Testwuson.X";
+  if (!fs::exists(wuson)) GTEST_SKIP() << "assimp-testmodels is not installed";
+  const CommandResult info = run_nec("info --no-tree " + wuson);
+  ASSERT_EQ(info.exit_code, 0) << info.output;
+  EXPECT_TRUE(contains(info.output, "animation 'Wuson_Walk': 109 frames at 30 fps")) << info.output;
+  EXPECT_TRUE(contains(info.output, "(longest root-to-leaf chain, metres)")) << info.output;
+
+  const std::string walk = path("walk.bvh"), animated = path("walk.glb");
+  ASSERT_EQ(run_nec("convert " + wuson + "#Wuson_Walk -o " + walk).exit_code, 0);
+  const CommandResult onto = run_nec("convert " + walk + " --onto " + wuson + " -o " + animated);
+  ASSERT_EQ(onto.exit_code, 0) << onto.output;
+  const CommandResult back = run_nec("info --no-tree " + animated);
+  EXPECT_TRUE(contains(back.output, "animation 'walk': 109 frames")) << back.output;  // first, named after the BVH
+
+  fs::create_directories(path("mixed"));
+  fs::copy_file(wuson, path("mixed/wuson.x"));
+  fs::copy_file(kCmu, path("mixed/01_01.bvh"));
+  const CommandResult prepared = run_nec("prepare " + path("mixed") + " -o " + path("cache") + " --quiet");
+  ASSERT_EQ(prepared.exit_code, 0) << prepared.output;
+
+  // Refused before any work, nothing written: FBX output, GLB onto a BVH, GLB without --onto, another skeleton.
+  for (const std::string& command :
+       {"convert " + walk + " --onto " + wuson + " -o " + path("out.fbx"),
+        "convert " + walk + " --onto " + kCmu + " -o " + path("out.glb"),
+        "convert " + kCmu + " --onto " + wuson + " -o " + path("out.glb")}) {
+    const CommandResult run = run_nec(command);
+    EXPECT_EQ(run.exit_code, 1) << command << "\n" << run.output;
+  }
+  EXPECT_EQ(run_nec("convert " + walk + " -o " + path("out.glb")).exit_code, 2);
+  EXPECT_FALSE(fs::exists(path("out.fbx")));
+  EXPECT_FALSE(fs::exists(path("out.glb")));
+}
+
 TEST_F(Cli, DemoWritesCacheBvhStripsAndPages) {
   const CommandResult run = run_nec("demo --creatures 3 --clips-per-creature 2 --out " + path("demo"));
   ASSERT_EQ(run.exit_code, 0) << run.output;

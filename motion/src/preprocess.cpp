@@ -178,7 +178,7 @@ bool fold_joint_translations(Clip& clip, const PreprocessOptions& options, Prepr
           options.translation_tolerance, options.translation_bone_tolerance);
       return false;
     }
-    if (deviation > largest) {
+    if (deviation > largest && deviation > 1e-9 * diameter) {  // below: float noise, a constant channel
       largest = deviation;
       largest_joint = j;
     }
