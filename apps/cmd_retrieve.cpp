@@ -25,7 +25,7 @@ int run_retrieve(int argc, char** argv) {
                   "nearest to a BVH clip. The database's embeddings are computed once and kept in the cache\n"
                   "directory (retrieval-<evaluator>.index), rebuilt when the cache or the evaluator changes.");
   cli.positional("CAPTION", "what to look for, e.g. \"a dog trots to the left\"", false);
-  cli.option("--motion", "CLIP.bvh", "", "list the captions nearest to this clip instead");
+  cli.option("--motion", "CLIP", "", "list the captions nearest to this clip (BVH or rigged asset) instead");
   cli.option("--db", "CACHE", "", "dataset cache to search (from `nec prepare`)", true);
   cli.option("--evaluator", "EVAL", "", "evaluator checkpoint (from `nec train evaluator`, e.g. runs/eval/best);\n"
                                         "default: models/default/evaluator");
@@ -39,7 +39,7 @@ int run_retrieve(int argc, char** argv) {
   if (!cli.parse(argc, argv)) return 0;
   const bool by_motion = !cli.value("--motion").empty();
   const std::vector<std::string>& captions = cli.positionals("CAPTION");
-  if (by_motion == !captions.empty()) throw UsageError("give either a CAPTION or --motion CLIP.bvh");
+  if (by_motion == !captions.empty()) throw UsageError("give either a CAPTION or --motion CLIP");
   const int64_t k = cli.integer("-k");
   if (k < 1) throw UsageError("-k must be >= 1");
   const std::string view = cli.value("--view");

@@ -2,6 +2,7 @@
 // positions, the real assets of Debian's assimp-testmodels, and the format
 // registry (FILE#ANIMATION, unknown types, folders of mixed files).
 #include "nec/assets/asset_reader.h"
+#include "nec/motion/augment.h"
 #include "nec/motion/clip_file.h"
 #include "nec/motion/corpus.h"
 #include "nec/motion/error.h"
@@ -252,6 +253,22 @@ TEST_F(AssetTest, MotionWrittenOntoACopyOfTheAssetReadsBackTheSame) {
     EXPECT_EQ(copy.bones, source.bones);
     EXPECT_GE(copy.materials, source.materials);
   }
+}
+
+// The same motion with another rest pose (every joint's world position kept): its rotations are turns from a
+// different rest, which would bend the asset's mesh.
+TEST_F(AssetTest, MotionOnAnotherRestPoseIsRefused) {
+  if (!fs::exists(kModels + "/X/Testwuson.X")) GTEST_SKIP() << "assimp-testmodels is not installed";
+  const std::string asset = kModels + "/X/Testwuson.X";
+  const Clip walk = read_clip(asset + "#Wuson_Walk");
+  testing::TempDir dir;
+  try {
+    write_clip(dir / "bent.glb", reset_rest_pose_to_frame(walk, 50), asset, "bent");
+    FAIL() << "another rest pose was written";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("rest pose is not this asset's"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir / "bent.glb"));
 }
 
 TEST_F(AssetTest, OutputsNecCannotWriteAreRefusedFirst) {

@@ -1,7 +1,9 @@
 // The tokenizer commands end to end on a tiny zoo: nec train tat (checkpoints,
 // --resume, baselines), encode, decode, transfer and eval recon, and their
 // errors on bad input.
+#include "nec/assets/asset_reader.h"
 #include "nec/motion/bvh.h"
+#include "nec/motion/clip_file.h"
 #include "nec/motion/files.h"
 #include "nec/motion/kinematics.h"
 #include "nec/motion/preprocess.h"
@@ -224,6 +226,37 @@ TEST_F(CliTat, EncodeDecodeOntoAnotherSkeletonKeepsItsNamesAndChannels) {
     EXPECT_LT((followed.motion.translation(t, 0) - followed_free_feet.motion.translation(t, 0)).norm(), 1e-9) << t;
     EXPECT_LT(followed.motion.rotation(t, 0).angularDistance(followed_free_feet.motion.rotation(t, 0)), 1e-9) << t;
   }
+}
+
+// A rigged asset as the target: -o .glb writes the same motion as -o .bvh, as the asset's first animation
+// named after the source file (the GLB read back by nec, joint by joint).
+TEST_F(CliTat, TransferOntoARiggedAssetWritesTheSameMotionAsGlb) {
+  const std::string wuson = "/usr/share/assimp/models/X/Testwuson.X";
+  if (!fs::exists(wuson)) GTEST_SKIP() << "assimp-testmodels is not installed";
+  assets::register_asset_formats();
+  const std::string source = zoo_clip("c000_biped");
+  ASSERT_FALSE(source.empty());
+  for (const char* ext : {".bvh", ".glb"}) {
+    const CommandResult run = run_nec("transfer " + source + " --to " + wuson + " --model " + shared("tat") +
+                                      " -o " + path(std::string("wuson") + ext) + " --threads 1");
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+  }
+  const Clip bvh = read_bvh(path("wuson.bvh"));
+  const Clip glb = read_clip(path("wuson.glb"));
+  EXPECT_EQ(glb.name, fs::path(source).filename().string());
+  ASSERT_EQ(glb.motion.frame_count, bvh.motion.frame_count);
+  const Pose a = forward_kinematics(bvh.skeleton, bvh.motion);
+  const Pose b = forward_kinematics(glb.skeleton, glb.motion);
+  double worst = 0.0;
+  int compared = 0;
+  for (int j = 0; j < bvh.skeleton.joint_count(); ++j) {
+    const int k = glb.skeleton.find(bvh.skeleton.names[j]);
+    if (k < 0) continue;
+    ++compared;
+    for (int t = 0; t < bvh.motion.frame_count; ++t) worst = std::max(worst, (a.position(t, j) - b.position(t, k)).norm());
+  }
+  EXPECT_GE(compared, bvh.skeleton.joint_count() - 1);
+  EXPECT_LT(worst, 1e-4 * bvh.skeleton.diameter());
 }
 
 // The same clips written in three joint-orient conventions (as authored, every bone along its parent's +X as

@@ -6,7 +6,7 @@
 #   blender -b --factory-startup --python-exit-code 1 \
 #       --python tests/interop/blender_export_assets.py -- OUTDIR SOURCE.bvh...
 #
-# Writes OUTDIR/STEM.fbx and OUTDIR/STEM.glb for every source.
+# Writes OUTDIR/STEM.fbx, OUTDIR/STEM_zup.fbx (exported +Z up) and OUTDIR/STEM.glb for every source.
 import os
 import sys
 
@@ -28,6 +28,10 @@ def export(source, out_dir):
     bpy.ops.export_scene.fbx(filepath=os.path.join(out_dir, stem + ".fbx"), bake_anim=True,
                              add_leaf_bones=True, bake_anim_use_nla_strips=False, bake_anim_use_all_actions=False,
                              bake_anim_simplify_factor=0.0)  # every frame as it is (the default thins keys)
+    # The same with +Z up (3ds Max's convention): nec must apply the FBX axis metadata.
+    bpy.ops.export_scene.fbx(filepath=os.path.join(out_dir, stem + "_zup.fbx"), bake_anim=True,
+                             add_leaf_bones=True, bake_anim_use_nla_strips=False, bake_anim_use_all_actions=False,
+                             bake_anim_simplify_factor=0.0, axis_forward='Y', axis_up='Z')
     bpy.ops.export_scene.gltf(filepath=os.path.join(out_dir, stem + ".glb"), export_format='GLB',
                               export_animations=True, export_optimize_animation_size=False)
     print("blender %s exported %s" % (bpy.app.version_string, stem), flush=True)

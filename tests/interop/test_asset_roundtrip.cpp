@@ -65,7 +65,7 @@ TEST(AssetRoundTrip, BlenderFbxAndGlbKeepTheWorldJointPositions) {
     const Clip bvh = read_bvh(source);
     const std::vector<Vec3> expected = positions_by_name(bvh, bvh.skeleton.names);
     const double diameter = bvh.skeleton.diameter();
-    for (const char* ext : {".fbx", ".glb"}) {
+    for (const char* ext : {".fbx", "_zup.fbx", ".glb"}) {
       const std::string asset = dir / (fs::path(source).stem().string() + ext);
       ClipReadOptions options;
       options.fps = bvh.motion.fps;  // Blender keyed the BVH's frames at its rate

@@ -23,8 +23,8 @@ namespace nec::assets {
 const std::vector<std::string>& asset_output_extensions();
 
 // Throws InputError naming the file for an unreadable asset, a clip with no
-// joint of its armature, or a clip whose rest pose is not the asset's (a bone
-// more than 5° off: its rotations would bend the asset); std::runtime_error
+// joint of its armature, or a clip whose rest pose is not the asset's (more than
+// a quarter of the bones 5° off: its rotations would bend the asset); std::runtime_error
 // when the export fails.
 // Returns the GLB file's bytes.
 std::string animation_onto_asset(const Clip& clip, const std::string& asset, const std::string& name);
