@@ -35,10 +35,6 @@ void print_tree(const Skeleton& s) {
   }
 }
 
-bool is_bvh(const std::string& path) {
-  return path.size() >= 4 && (path.compare(path.size() - 4, 4, ".bvh") == 0 || path.compare(path.size() - 4, 4, ".BVH") == 0);
-}
-
 void declare_source_fps(CommandLine& cli) {
   cli.option("--source-fps", "FPS", "0",
              "the motion's true frame rate, replacing the file's (BVH Frame Time); assets are sampled at it\n"
@@ -98,7 +94,7 @@ int run_info(int argc, char** argv) {
     }
   }
   fmt::print("diameter  {:.6g} (longest root-to-leaf chain, {})\n", s.diameter(),
-             is_bvh(path) ? "file units" : "metres");
+             is_bvh_file(path) ? "file units" : "metres");
   const FrameRateCheck rate = check_frame_rate(m);
   if (rate.turn_per_frame > 0.0) {
     fmt::print("turning   {:.3g}° per frame, {:.3g}°/s (median over frames of the joints' mean)\n", rate.turn_per_frame,
@@ -133,7 +129,7 @@ int run_convert(int argc, char** argv) {
   const std::string in = cli.positional_value("IN");
   const std::string out = cli.value("-o");
   const std::string onto = cli.value("--onto");
-  if (onto.empty() && !is_bvh(out)) throw UsageError("-o " + out + ": only BVH is written without --onto ASSET");
+  if (onto.empty() && !is_bvh_file(out)) throw UsageError("-o " + out + ": only BVH is written without --onto ASSET");
   if (!onto.empty()) check_clip_output(out, onto);
   BvhWriteOptions options;
   if (cli.value("--order") != "keep") options.euler_order = parse_order_option(cli.value("--order"));

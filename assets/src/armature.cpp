@@ -188,11 +188,8 @@ Armature find_armature(const aiScene& scene, const std::string& path) {
     }
   }
   // Bind pose of every skinned bone, in world coordinates.
-  std::vector<Mat4> own_world(a.nodes.size());
-  for (size_t i = 0; i < a.nodes.size(); ++i) {
-    const Mat4 local = to_eigen(a.nodes[i].node->mTransformation);
-    own_world[i] = a.nodes[i].parent < 0 ? local : Mat4(own_world[a.nodes[i].parent] * local);
-  }
+  a.own_world = node_world_transforms(a, node_channels(a, nullptr), 0.0);
+  const std::vector<Mat4>& own_world = a.own_world;
   std::map<int, Mat4> bind;
   for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
     const aiMesh& mesh = *scene.mMeshes[m];
@@ -300,6 +297,7 @@ Armature find_armature(const aiScene& scene, const std::string& path) {
       a.rest.push_back(a.rest[a.joint_parents[j]] * own_world[pn].inverse() * own_world[n]);
     }
   }
+  for (const Mat4& m : a.rest) a.rest_rotations.push_back(rotation_part(m));
   // End sites: childless, meshless nodes hanging from a joint (Blender's bone tips).
   for (int i = root + 1; i < static_cast<int>(a.nodes.size()); ++i) {
     const aiNode* n = a.nodes[i].node;

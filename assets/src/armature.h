@@ -33,7 +33,9 @@ struct Armature {
   std::vector<int> joint_parents;      // (J) joint index of the parent, -1 for the root
   std::vector<int> end_site_joints;    // joint each end site hangs from
   std::vector<int> end_site_nodes;     // node of each end site
+  std::vector<Mat4> own_world;         // every node's world transform without animation (file coordinates)
   std::vector<Mat4> rest;              // (J) world transform of each joint at rest (file coordinates)
+  std::vector<Quat> rest_rotations;    // (J) rotation_part(rest[j])
   std::vector<Mat4> end_site_rest;     // world transform of each end site at rest
   Mat3 basis = Mat3::Identity();       // file axes -> nec's (+Y up, metres): x' = scale * basis * x
   double scale = 1.0;
@@ -41,6 +43,13 @@ struct Armature {
 
   int joint_count() const { return static_cast<int>(joints.size()); }
   std::string joint_name(int joint) const { return nodes[joints[joint]].node->mName.C_Str(); }
+  // The world transform of the node above the root joint (identity when the root joint is the scene's root).
+  Mat4 above_root() const {
+    const int parent = nodes[joints[0]].parent;
+    return parent < 0 ? Mat4(Mat4::Identity()) : own_world[parent];
+  }
+  // Where a world transform (file coordinates) puts its origin in nec's: metres, +Y up.
+  Vec3 position(const Mat4& world) const { return scale * basis * world.topRightCorner<3, 1>(); }
 };
 
 // The joints' names as nec's Skeleton holds them: the node names, made non-empty and unique.

@@ -29,9 +29,9 @@ WorldPose world_pose(const Armature& a, const std::vector<Mat4>& node_world) {
   WorldPose pose;
   for (int j = 0; j < a.joint_count(); ++j) {
     const Mat4& w = node_world[a.joints[j]];
-    pose.positions.push_back(a.scale * a.basis * w.topRightCorner<3, 1>());
-    const Mat3 turn = a.basis * (rotation_part(w) * rotation_part(a.rest[j]).conjugate()).toRotationMatrix() *
-                      a.basis.transpose();
+    pose.positions.push_back(a.position(w));
+    const Mat3 turn =
+        a.basis * (rotation_part(w) * a.rest_rotations[j].conjugate()).toRotationMatrix() * a.basis.transpose();
     pose.turns.push_back(Quat(turn).normalized());
   }
   return pose;
@@ -40,16 +40,15 @@ WorldPose world_pose(const Armature& a, const std::vector<Mat4>& node_world) {
 Skeleton rest_skeleton(const Armature& a) {
   Skeleton s;
   const std::vector<std::string> names = joint_names(a);
-  auto position = [&](const Mat4& m) -> Vec3 { return a.scale * a.basis * m.topRightCorner<3, 1>(); };
   for (int j = 0; j < a.joint_count(); ++j) {
     const int p = a.joint_parents[j];
-    const Vec3 offset = p < 0 ? position(a.rest[j]) : Vec3(position(a.rest[j]) - position(a.rest[p]));
+    const Vec3 offset = p < 0 ? a.position(a.rest[j]) : Vec3(a.position(a.rest[j]) - a.position(a.rest[p]));
     s.add_joint(names[j], p, offset,
                 p < 0 ? ChannelLayout::position_rotations(EulerOrder::ZXY) : ChannelLayout::rotations(EulerOrder::ZXY));
   }
   for (size_t e = 0; e < a.end_site_joints.size(); ++e) {
     const int p = a.end_site_joints[e];
-    s.end_sites.push_back({p, position(a.end_site_rest[e]) - position(a.rest[p])});
+    s.end_sites.push_back({p, a.position(a.end_site_rest[e]) - a.position(a.rest[p])});
   }
   s.validate();
   return s;

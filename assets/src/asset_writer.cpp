@@ -25,7 +25,6 @@ namespace {
 // (a T-pose motion on an A-pose asset) turns whole limbs: a quarter of the bones.
 void check_same_rest(const Armature& a, const Clip& clip, const std::vector<int>& clip_joint, const std::string& asset) {
   constexpr double kMaxDegrees = 5.0;
-  auto position = [&](const Mat4& m) -> Vec3 { return a.scale * a.basis * m.topRightCorner<3, 1>(); };
   int compared = 0, off = 0;
   double worst = 0.0;
   std::string worst_bone;
@@ -33,7 +32,7 @@ void check_same_rest(const Armature& a, const Clip& clip, const std::vector<int>
     const int parent = a.joint_parents[j];
     const int c = clip_joint[static_cast<size_t>(j)];
     if (parent < 0 || c < 0 || clip.skeleton.parents[c] < 0 || clip.skeleton.parents[c] != clip_joint[parent]) continue;
-    const Vec3 bone = position(a.rest[j]) - position(a.rest[parent]);
+    const Vec3 bone = a.position(a.rest[j]) - a.position(a.rest[parent]);
     const Vec3& offset = clip.skeleton.offsets[c];
     if (bone.norm() < 1e-9 || offset.norm() < 1e-9) continue;
     const double degrees = std::acos(std::clamp(bone.normalized().dot(offset.normalized()), -1.0, 1.0)) * kDegreesPerRadian;
@@ -75,7 +74,6 @@ std::vector<std::vector<Mat4>> joint_world_transforms(const Armature& a, const C
         matched, names.size()));
   }
   check_same_rest(a, clip, clip_joint, asset);
-  const std::vector<Mat4> own = node_world_transforms(a, node_channels(a, nullptr), 0.0);
   const Pose pose = forward_kinematics(clip.skeleton, clip.motion);
   const Mat3 back = a.basis.transpose();  // nec's axes -> the file's
   std::vector<std::vector<Mat4>> world(static_cast<size_t>(clip.motion.frame_count),
@@ -86,9 +84,8 @@ std::vector<std::vector<Mat4>> joint_world_transforms(const Armature& a, const C
       const int parent = a.joint_parents[j];
       const int c = clip_joint[static_cast<size_t>(j)];
       if (c < 0) {  // held at rest relative to its parent (node transforms relative to the one above)
-        const int node = a.joints[j];
-        const Mat4 above = parent < 0 ? own[a.nodes[node].parent] : w[parent];
-        w[j] = above * to_eigen(a.nodes[node].node->mTransformation);
+        const Mat4 above = parent < 0 ? a.above_root() : w[parent];
+        w[j] = above * to_eigen(a.nodes[a.joints[j]].node->mTransformation);
         continue;
       }
       // World turn from rest in nec's axes -> in the file's, applied to the rest transform (keeps its scale).
@@ -104,7 +101,6 @@ std::vector<std::vector<Mat4>> joint_world_transforms(const Armature& a, const C
 
 aiAnimation* make_animation(const Armature& a, const std::vector<std::vector<Mat4>>& world, double fps,
                             const std::string& name) {
-  const std::vector<Mat4> own = node_world_transforms(a, node_channels(a, nullptr), 0.0);
   auto animation = std::make_unique<aiAnimation>();
   animation->mName = aiString(name);
   animation->mTicksPerSecond = fps;
@@ -123,7 +119,7 @@ aiAnimation* make_animation(const Armature& a, const std::vector<std::vector<Mat
     channel->mScalingKeys = new aiVectorKey[frames];
     const int parent = a.joint_parents[j];
     for (unsigned t = 0; t < frames; ++t) {
-      const Mat4 above = parent < 0 ? own[a.nodes[a.joints[j]].parent] : world[t][parent];
+      const Mat4 above = parent < 0 ? a.above_root() : world[t][parent];
       const aiMatrix4x4 local = to_assimp(above.inverse() * world[t][j]);
       aiVector3D scaling, position;
       aiQuaternion rotation;

@@ -6,6 +6,8 @@
 #include "nec/motion/files.h"
 #include "nec/motion/frame_rate.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <filesystem>
 #include <mutex>
@@ -61,13 +63,16 @@ std::pair<std::string, std::string> split_animation(const std::string& path) {
   return {path.substr(0, hash), path.substr(hash + 1)};
 }
 
+// A file of a registered asset format (not BVH): one a writer can put motion onto.
+bool is_asset_file(const std::string& path) { return !is_bvh_file(path) && is_motion_file(path); }
+
 std::vector<Clip> read_whole_file(const std::string& path, const ClipReadOptions& options) {
   const std::string ext = lower_extension(path);
   if (ext == ".bvh") {
     Clip clip = read_bvh(path);
     if (options.fps > 0.0) {
-      clip.warnings.push_back("frame rate " + std::to_string(clip.motion.fps) + " fps in the file replaced by " +
-                              std::to_string(options.fps) + " (--fps)");
+      clip.warnings.push_back(fmt::format("frame rate {:.6g} fps in the file replaced by {:.6g} (--source-fps)",
+                                          clip.motion.fps, options.fps));
       clip.motion.fps = options.fps;
     } else if (std::string warning = check_frame_rate(clip.motion).warning; !warning.empty()) {
       clip.warnings.push_back(std::move(warning));
@@ -109,6 +114,8 @@ std::vector<std::string> motion_file_extensions() {
   }
   return out;
 }
+
+bool is_bvh_file(const std::string& path) { return lower_extension(path) == ".bvh"; }
 
 bool is_motion_file(const std::string& path) {
   const std::string ext = lower_extension(path);
@@ -156,8 +163,7 @@ void check_clip_output(const std::string& out, const std::string& target) {
     }
     throw InputError(out, 0, "nec does not write '" + ext + "' files (it writes " + known + ")");
   }
-  const std::string target_file = split_animation(target).first;
-  if (lower_extension(target_file) == ".bvh" || !is_motion_file(target_file)) {
+  if (!is_asset_file(split_animation(target).first)) {
     throw InputError(out, 0, "a '" + ext + "' output is the target's asset with the motion added; the target " +
                                  (target.empty() ? std::string("is missing") : "'" + target + "' is no rigged asset") +
                                  " (write .bvh, or give an FBX / glTF / Collada / .x target)");
@@ -166,7 +172,7 @@ void check_clip_output(const std::string& out, const std::string& target) {
 
 void write_clip(const std::string& out, const Clip& clip, const std::string& target, const std::string& name) {
   check_clip_output(out, target);
-  if (lower_extension(out) == ".bvh") {
+  if (is_bvh_file(out)) {
     write_bvh(out, clip.skeleton, clip.motion);
     return;
   }
@@ -177,7 +183,7 @@ std::string encode_clip_onto_asset(const std::string& ext, const Clip& clip, con
                                    const std::string& name) {
   const ClipWriter* writer = writer_for(ext);
   const std::string target_file = split_animation(target).first;
-  if (writer == nullptr || lower_extension(target_file) == ".bvh" || !is_motion_file(target_file)) return "";
+  if (writer == nullptr || !is_asset_file(target_file)) return "";
   return writer->encode(clip, target_file, name);
 }
 

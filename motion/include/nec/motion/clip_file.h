@@ -42,6 +42,7 @@ void register_clip_writer(ClipWriter writer);
 // Extensions read by read_clips(): ".bvh" and the registered ones.
 std::vector<std::string> motion_file_extensions();
 bool is_motion_file(const std::string& path);
+bool is_bvh_file(const std::string& path);  // by its extension, in any case
 
 // Every clip in the file; a BVH file whose Frame Time does not fit its motion
 // gets a warning (motion/frame_rate.h). `path` may name one animation as FILE#NAME (used when
