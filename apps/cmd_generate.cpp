@@ -1,9 +1,10 @@
-// nec generate: motion from text on the user's own skeleton, through the GPT's tokens.
+// nec generate: motion from text on the user's own skeleton, through the GPT's tokens or the diffusion model.
 #include "command_line.h"
 #include "commands.h"
 #include "model_options.h"
 #include "torch_runtime.h"
 
+#include "nec/diffusion/generation.h"
 #include "nec/gpt/generation.h"
 #include "nec/motion/clip_file.h"
 #include "nec/motion/error.h"
@@ -16,6 +17,9 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <optional>
+#include <utility>
 
 namespace nec::app {
 namespace {
@@ -38,51 +42,53 @@ std::vector<std::string> output_paths(const std::string& out, int samples) {
   return paths;
 }
 
+// Options of one kind of model, refused with another when changed from their defaults {option, default}.
+void refuse_options(const CommandLine& cli, const std::vector<std::pair<std::string, std::string>>& options,
+                    const std::string& kind) {
+  for (const auto& [option, default_value] : options) {
+    if (cli.value(option) != default_value) throw UsageError(option + " applies to " + kind + " models only");
+  }
+}
+
 }  // namespace
 
 int run_generate(int argc, char** argv) {
   CommandLine cli("nec generate",
-                  "Motion from text for any skeleton: the GPT writes tokens for the caption and the skeleton, the\n"
-                  "tokenizer decodes them onto it, and the BVH is written in that file's own joint names, channels,\n"
-                  "Euler orders, units and up axis, standing on its floor with its feet pinned, and its caption\n"
-                  "in OUT.txt beside it (what `nec eval t2m` reads). Several captions make one long motion, each\n"
-                  "segment going on from the one before. --samples K writes OUT_1.bvh ... OUT_K.bvh.");
+                  "Motion from text for any skeleton, written in that file's own joint names, channels, Euler\n"
+                  "orders, units and up axis, standing on its floor with its feet pinned, and its caption in\n"
+                  "OUT.txt beside it (what `nec eval t2m` reads). With a GPT checkpoint the GPT writes tokens for\n"
+                  "the caption and the skeleton and the tokenizer decodes them onto it; with a diffusion checkpoint\n"
+                  "(`nec train diffusion`) the motion is denoised on the skeleton's joints directly. Several\n"
+                  "captions make one long motion, each segment going on from the one before. --samples K writes\n"
+                  "OUT_1.bvh ... OUT_K.bvh.");
   cli.positional("CAPTION", "what the motion shows, e.g. \"a dog walks forward\"; several: one segment each", true, true);
   cli.option("--skeleton", "SKELETON", "", "BVH file or rigged asset to generate for (its motion is not used)", true);
   cli.option("-o", "OUT", "", "output: .bvh, or .glb (a copy of the skeleton's asset with the motion added)", true);
-  cli.option("--model", "GPT_CKPT", "", "GPT checkpoint (from `nec train gpt`); default: models/default/gpt");
-  cli.option("--seconds", "S", "auto", "length of each segment (up to 60); auto: the GPT ends it");
+  cli.option("--model", "CKPT", "", "GPT (`nec train gpt`) or diffusion (`nec train diffusion`) checkpoint;\n"
+                                    "default: models/default/gpt");
+  cli.option("--seconds", "S", "auto", "length of each segment (up to 60); auto: the GPT ends it (diffusion: one window)");
   cli.option("--samples", "K", "1", "how many motions to write");
   cli.option("--seed", "N", "0", "sample i draws from seed + i");
-  cli.option("--temperature", "T", "1", "divides the logits (lower: safer, less varied)");
-  cli.option("--top-k", "K", "0", "keep the K most likely codes (0: all)");
-  cli.option("--top-p", "P", "0.95", "keep the fewest codes holding probability P (1: all)");
   cli.option("--guidance", "G", "2.5", "classifier-free guidance scale (1: none)");
+  cli.option("--temperature", "T", "1", "GPT: divides the logits (lower: safer, less varied)");
+  cli.option("--top-k", "K", "0", "GPT: keep the K most likely codes (0: all)");
+  cli.option("--top-p", "P", "0.95", "GPT: keep the fewest codes holding probability P (1: all)");
+  cli.option("--steps", "N", "50", "diffusion: denoising steps (DDIM, of the model's 1000)");
   cli.option("--view", "PAGE.html", "", "also write a page that plays the motions");
   cli.option("--up", "AXIS", "auto", "up axis of the skeleton file: auto, y or z");
-  cli.flag("--free-height", "keep the height as decoded (default: settle the body onto the floor)");
-  cli.flag("--free-feet", "leave the feet as decoded (default: pin the feet the motion puts down)");
+  cli.flag("--free-height", "keep the height as generated (default: settle the body onto the floor)");
+  cli.flag("--free-feet", "leave the feet as generated (default: pin the feet the motion puts down)");
   cli.flag("--force", "overwrite output files that exist");
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
   cli.option("--threads", "N", "0", "torch threads; 0 = all cores");
   cli.example("nec generate \"a dragon flaps its wings and takes off\" --skeleton dragon.bvh --model runs/gpt -o out.bvh");
   cli.example("nec generate \"a dog walks forward\" \"then it sits down\" --skeleton dog.bvh --model runs/gpt -o dog.bvh --seconds 3");
-  cli.example("nec generate \"a spider walks forward quickly\" --skeleton spider.bvh --model runs/gpt -o spider.bvh --samples 4 --view spider.html");
+  cli.example("nec generate \"a spider walks forward quickly\" --skeleton spider.bvh --model runs/diffusion -o spider.bvh --samples 4 --view spider.html");
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
 
-  gpt::SamplingOptions sampling;
-  sampling.temperature = cli.number("--temperature");
-  sampling.top_k = cli.integer("--top-k");
-  sampling.top_p = cli.number("--top-p");
-  sampling.guidance = cli.number("--guidance");
   if (cli.integer("--seed") < 0) throw UsageError("--seed must be >= 0");
-  sampling.seed = static_cast<uint64_t>(cli.integer("--seed"));
-  try {
-    sampling.validate();
-  } catch (const std::invalid_argument& e) {
-    throw UsageError(e.what());
-  }
+  const uint64_t seed = static_cast<uint64_t>(cli.integer("--seed"));
   const int samples = cli.integer("--samples");
   if (samples < 1 || samples > 256) throw UsageError("--samples must be in 1..256");
   double seconds = 0;
@@ -92,6 +98,32 @@ int run_generate(int argc, char** argv) {
       throw InputError("--seconds", 0, fmt::format("{} is out of range: give a length in (0, {}] seconds, or auto",
                                                     cli.value("--seconds"), kMaxSeconds));
     }
+  }
+  const std::string model = model_or_default(cli.value("--model"), "gpt", "--model");
+  const bool is_diffusion = checkpoint_format(model) == diffusion::kDiffusionCheckpointFormat;
+  gpt::SamplingOptions gpt_sampling;
+  diffusion::DiffusionSamplingOptions diffusion_sampling;
+  if (is_diffusion) {
+    refuse_options(cli, {{"--temperature", "1"}, {"--top-k", "0"}, {"--top-p", "0.95"}}, "GPT");
+    diffusion_sampling.steps = cli.integer("--steps");
+    diffusion_sampling.guidance = cli.number("--guidance");
+    diffusion_sampling.seed = seed;
+  } else {
+    refuse_options(cli, {{"--steps", "50"}}, "diffusion");
+    gpt_sampling.temperature = cli.number("--temperature");
+    gpt_sampling.top_k = cli.integer("--top-k");
+    gpt_sampling.top_p = cli.number("--top-p");
+    gpt_sampling.guidance = cli.number("--guidance");
+    gpt_sampling.seed = seed;
+  }
+  try {
+    if (is_diffusion) {
+      diffusion_sampling.validate();
+    } else {
+      gpt_sampling.validate();
+    }
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
   }
   const std::vector<std::string> outputs = output_paths(cli.value("-o"), samples);
   const std::string view = cli.value("--view");
@@ -109,32 +141,66 @@ int run_generate(int argc, char** argv) {
   }
 
   use_torch_threads(threads_option(cli));
-  const std::string model = model_or_default(cli.value("--model"), "gpt", "--model");
-  gpt::GeneratorSession session = gpt::open_generator(model, cli.value("--glove"));
   const UpAxis up = cli.up_axis("--up");
-  const PreparedClip target = tat::prepare_for_model(cli.value("--skeleton"), session.fps(), up);
-  std::vector<gpt::Segment> segments;
-  for (const std::string& caption : cli.positionals("CAPTION")) {
-    const int64_t steps = seconds > 0 ? std::max<int64_t>(1, std::lround(seconds * session.fps() / session.downsampling())) : 0;
-    segments.push_back({caption, steps});
-  }
-  const std::vector<at::Tensor> codes = gpt::generate_codes(session, target, segments, samples, sampling);
-
+  const std::vector<std::string>& captions = cli.positionals("CAPTION");
   std::string caption;
-  for (const gpt::Segment& segment : segments) caption += (caption.empty() ? "" : " / ") + segment.caption;
+  for (const std::string& segment : captions) caption += (caption.empty() ? "" : " / ") + segment;
   tat::DecodeCorrections corrections;
   corrections.heading = false;
   corrections.ground = !cli.is_set("--free-height");
   corrections.feet = !cli.is_set("--free-feet");
+
+  // Sample i written to outputs[i]; returns its frame count.
+  std::function<int(int)> write_sample;
+  double fps = 30.0;
+  std::optional<gpt::GeneratorSession> gpt_session;
+  std::optional<diffusion::DiffusionSession> diffusion_session;
+  std::vector<at::Tensor> codes;
+  std::vector<Features> motions;
+  std::optional<PreparedClip> target;
+  if (is_diffusion) {
+    diffusion_session.emplace(diffusion::open_diffusion(model, cli.value("--glove")));
+    fps = diffusion_session->fps();
+    const int64_t noise_steps = diffusion_session->model.model->config().noise_steps;
+    if (diffusion_sampling.steps > noise_steps) {
+      throw UsageError(fmt::format("--steps {} is more than the model's {} noise steps", diffusion_sampling.steps, noise_steps));
+    }
+    target = tat::prepare_for_model(cli.value("--skeleton"), fps, up);
+    const int64_t window = diffusion_session->model.model->config().max_frames;
+    std::vector<diffusion::DiffusionSegment> segments;
+    for (const std::string& segment : captions) {
+      segments.push_back({segment, seconds > 0 ? std::max<int64_t>(4, std::lround(seconds * fps)) : window});
+    }
+    motions = diffusion::generate_motions(*diffusion_session, *target, segments, samples, diffusion_sampling);
+    write_sample = [&](int i) {
+      tat::write_onto(*target, motions[static_cast<size_t>(i)], corrections, 0.0, cli.value("--skeleton"),
+                      outputs[static_cast<size_t>(i)], caption);
+      return motions[static_cast<size_t>(i)].frame_count;
+    };
+  } else {
+    gpt_session.emplace(gpt::open_generator(model, cli.value("--glove")));
+    fps = gpt_session->fps();
+    target = tat::prepare_for_model(cli.value("--skeleton"), fps, up);
+    std::vector<gpt::Segment> segments;
+    for (const std::string& segment : captions) {
+      segments.push_back({segment, seconds > 0 ? std::max<int64_t>(1, std::lround(seconds * fps / gpt_session->downsampling())) : 0});
+    }
+    codes = gpt::generate_codes(*gpt_session, *target, segments, samples, gpt_sampling);
+    write_sample = [&](int i) {
+      const tat::TokenFile tokens = gpt_session->token_file(codes[static_cast<size_t>(i)], caption);
+      tat::decode_onto(gpt_session->tokenizer, tokens, cli.value("--skeleton"), up, corrections, outputs[static_cast<size_t>(i)]);
+      return tokens.frames;
+    };
+  }
+
   std::vector<viewer::ViewClip> views;
   for (int i = 0; i < samples; ++i) {
-    const tat::TokenFile tokens = session.token_file(codes[static_cast<size_t>(i)], caption);
-    tat::decode_onto(session.tokenizer, tokens, cli.value("--skeleton"), up, corrections, outputs[static_cast<size_t>(i)]);
+    const int frames = write_sample(i);
     std::string lines;
-    for (const gpt::Segment& segment : segments) lines += segment.caption + "\n";
+    for (const std::string& segment : captions) lines += segment + "\n";
     write_file_atomic(sidecar_path(outputs[static_cast<size_t>(i)]), lines);
-    fmt::print("wrote {}: {} frames ({:.1f} s) on the skeleton of {}\n", outputs[static_cast<size_t>(i)], tokens.frames,
-               tokens.frames / session.fps(), cli.value("--skeleton"));
+    fmt::print("wrote {}: {} frames ({:.1f} s) on the skeleton of {}\n", outputs[static_cast<size_t>(i)], frames,
+               frames / fps, cli.value("--skeleton"));
     if (!view.empty()) {
       viewer::ViewClip clip = viewer::load_view_clip(outputs[static_cast<size_t>(i)]);
       clip.captions = {caption};

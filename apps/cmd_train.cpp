@@ -9,7 +9,8 @@ int run_train(int argc, char** argv) {
                     {{"owo", run_train_owo, "pretrain the OwO skeleton encoder on the skeletons of dataset caches"},
                      {"tat", run_train_tat, "train the topology-agnostic tokenizer with a frozen OwO encoder"},
                      {"evaluator", run_train_evaluator, "train the text-motion evaluator (retrieval and metrics)"},
-                     {"gpt", run_train_gpt, "train the text-to-token transformer on a tokenizer's codes"}},
+                     {"gpt", run_train_gpt, "train the text-to-token transformer on a tokenizer's codes"},
+                     {"diffusion", run_train_diffusion, "train the motion diffusion model (--stage pose, then motion)"}},
                     argc, argv);
 }
 

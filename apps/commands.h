@@ -30,6 +30,7 @@ int run_eval_retrieval(int argc, char** argv);  // nec eval retrieval
 int run_eval_t2m(int argc, char** argv);        // nec eval t2m
 int run_retrieve(int argc, char** argv);        // nec retrieve
 int run_train_gpt(int argc, char** argv);       // nec train gpt
+int run_train_diffusion(int argc, char** argv); // nec train diffusion
 int run_generate(int argc, char** argv);        // nec generate
 
 }  // namespace nec::app

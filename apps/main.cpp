@@ -31,7 +31,7 @@ constexpr Subcommand kSubcommands[] = {
     {"text", nec::app::run_text, "word vectors: import GloVe once, joint-name similarity, nearest words"},
     {"view", nec::app::run_view, "show BVH clips in a self-contained HTML player, or a PNG strip of frames"},
     {"retrieve", nec::app::run_retrieve, "find motions of a cache by text, or captions for a motion (trained evaluator)"},
-    {"train", nec::app::run_train, "train a model: owo (skeleton encoder), tat (tokenizer), evaluator (text-motion) or gpt (text to tokens)"},
+    {"train", nec::app::run_train, "train a model: owo (skeleton encoder), tat (tokenizer), evaluator (text-motion), gpt (text to tokens) or diffusion"},
     {"eval", nec::app::run_eval, "evaluate a trained model: owo (skeleton encoder on unseen skeletons)"},
     {"encode", nec::app::run_encode, "turn a BVH clip into motion tokens with a trained tokenizer"},
     {"decode", nec::app::run_decode, "decode motion tokens onto any skeleton, as BVH"},

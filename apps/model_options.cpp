@@ -3,7 +3,10 @@
 
 #include "torch_runtime.h"
 
+#include <nlohmann/json.hpp>
+
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 namespace nec::app {
@@ -20,6 +23,14 @@ std::string model_or_default(const std::string& given, const std::string& name, 
     throw UsageError(option + " is needed: there are no default models in models/default (scripts/train_default_models.sh makes them)");
   }
   return found;
+}
+
+std::string checkpoint_format(const std::string& dir) {
+  std::ifstream in(std::filesystem::path(dir) / "config.json");
+  if (!in) return "";
+  const nlohmann::json config = nlohmann::json::parse(in, nullptr, /*allow_exceptions=*/false);
+  if (!config.is_object() || !config.contains("format") || !config["format"].is_string()) return "";
+  return config["format"].get<std::string>();
 }
 
 void declare_model_options(CommandLine& cli, bool with_model) {

@@ -17,6 +17,9 @@ std::string default_model_dir(const std::string& name);
 // `given` when not empty, else the default model `name`; UsageError naming `option` when there is none.
 std::string model_or_default(const std::string& given, const std::string& name, const std::string& option);
 
+// The "format" of the checkpoint directory `dir` (its config.json), e.g. "nec-gpt"; "" when it has none.
+std::string checkpoint_format(const std::string& dir);
+
 // Declares --model (unless with_model is false; default: the default models' tokenizer), --glove, --threads,
 // --window-overlap.
 void declare_model_options(CommandLine& cli, bool with_model = true);

@@ -21,6 +21,12 @@
 #       Generation: a 4-s motion from text to BVH on disk with the default GPT
 #       (one sample, goal < 0.5 s; 32 samples, goal < 3 s), and sampled tokens
 #       per second with and without the KV cache at 4, 16 and 64 s.
+#   scripts/bench.sh diffusion
+#       The diffusion model (configs/diffusion_pose_cpu.json's denoiser, random
+#       weights): a 4-s motion at 50 DDIM steps with guidance, one sample (goal
+#       < 3 s on 2 cores) and a batch of 8, peak memory; and one layer's
+#       factorized attention against full spatio-temporal attention for
+#       J = 20, 60, 140 joints and T = 60, 120, 240 frames. About 10 minutes.
 #   scripts/bench.sh assets
 #       Rigged assets: reading FBX and GLB (assimp) against reading BVH, on the
 #       Debian CMU files and a zoo dragon exported by Blender 3.4
@@ -28,14 +34,14 @@
 #       MB/s; and writing a motion onto an asset as GLB (ms).
 # Raw results in build-bench/: bench_motion.json, peer_threejs.json,
 # bench_tat_step{1,2}.json, peer_tat_step{1,2}.json, bench_tat_clip.json, bench_evaluator.json, bench_gpt.json,
-# bench_assets.json
+# bench_diffusion.json, bench_assets.json
 # (NEC_BENCH_BUILD=DIR builds and writes in DIR instead).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 section=all
 case "${1:-}" in
-  motion | tat | evaluator | gpt | assets) section=$1; shift ;;
+  motion | tat | evaluator | gpt | diffusion | assets) section=$1; shift ;;
 esac
 if [ "$section" != motion ] && [ "$section" != all ] && [ $# -gt 0 ]; then
   echo "bench.sh: '$section' takes no arguments" >&2
@@ -263,6 +269,35 @@ print()
 PY
 }
 
+bench_diffusion() {
+  cmake --build "$build" --target bench_diffusion
+  OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive} "$build"/benchmarks/bench_diffusion --benchmark_format=console \
+    --benchmark_out="$build"/bench_diffusion.json --benchmark_out_format=json >/dev/null
+  "$python" - "$build"/bench_diffusion.json <<'PY'
+import json, sys
+rows = json.load(open(sys.argv[1]))["benchmarks"]
+def median(name, field="real_time"):
+    found = [r for r in rows if r["run_name"].split("/iterations")[0] == name and r.get("aggregate_name") == "median"]
+    return found[0][field] if found else float("nan")
+print("""
+| diffusion sampling, 4-s motion, 24 joints, 50 steps, guidance 2.5; median of 3, 2 cores | s | peak memory, MB |
+|---|---:|---:|""")
+for batch, label in ((1, "one sample (goal < 3 s)"), (8, "a batch of 8")):
+    print(f"| {label} | {median(f'BM_Sample4s/batch:{batch}') / 1000:.2f} | {median(f'BM_Sample4s/batch:{batch}', 'peak_rss_mb'):.0f} |")
+print("""
+| one attention layer, ms (factorized / full spatio-temporal = ratio) | T = 60 | T = 120 | T = 240 |
+|---|---:|---:|---:|""")
+for joints in (20, 60, 140):
+    cells = []
+    for frames in (60, 120, 240):
+        f = median(f"BM_Attention/joints:{joints}/frames:{frames}/full:0")
+        g = median(f"BM_Attention/joints:{joints}/frames:{frames}/full:1")
+        cells.append(f"{f:.0f} / {g:.0f} = {f / g:.3f}")
+    print(f"| J = {joints} | " + " | ".join(cells) + " |")
+print()
+PY
+}
+
 bench_assets() {
   ensure_packages bench blender assimp-testmodels
   cmake --build "$build" --target bench_assets nec
@@ -310,5 +345,6 @@ case "$section" in
   tat) bench_tat ;;
   evaluator) bench_evaluator ;;
   gpt) bench_gpt ;;
-  all) bench_motion "$@"; bench_tat; bench_evaluator; bench_gpt ;;
+  diffusion) bench_diffusion ;;
+  all) bench_motion "$@"; bench_tat; bench_evaluator; bench_gpt; bench_diffusion ;;
 esac

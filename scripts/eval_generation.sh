@@ -3,14 +3,14 @@
 # a motion for the clip's first caption onto the clip's own skeleton file, as long as the clip; then
 # `nec eval t2m` compares them with the real clips (R-Precision, FID, MM-Dist, Diversity, Coverage/Novelty,
 # jitter), per dataset.
-#   scripts/eval_generation.sh GPT_CKPT CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES]
+#   scripts/eval_generation.sh MODEL CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES]     # MODEL: a GPT or diffusion checkpoint
 # SPLIT: test (default) or val; SAMPLES per caption (default 1; 2 or more also give Multimodality).
 # Writes OUT_DIR/generated/<dataset>/<the source's folder>/*.bvh (+ caption sidecars; the zoo's folders
 # cNNN_<plan> give `nec eval t2m` the body plan), OUT_DIR/t2m.md and OUT_DIR/t2m.json.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 4 ]; then
-  echo "usage: scripts/eval_generation.sh GPT_CKPT CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES]" >&2
+  echo "usage: scripts/eval_generation.sh MODEL CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES]" >&2
   exit 2
 fi
 model=$1 cache=$2 evaluator=$3 out=$4 split=${5:-test} samples=${6:-1}

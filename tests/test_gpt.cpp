@@ -9,6 +9,8 @@
 #include "nec/gpt/training.h"
 #include "nec/motion/error.h"
 
+#include "text_encoder_support.h"
+
 #include <gtest/gtest.h>
 #include <torch/torch.h>
 
@@ -46,24 +48,7 @@ GptConfig tiny_config() {
   return c;
 }
 
-// Captions given as piece ids (>= 2: 0 pads, 1 is unknown).
-text::TextBatch pieces(const std::vector<std::vector<int64_t>>& rows) {
-  size_t longest = 1;
-  for (const auto& row : rows) longest = std::max(longest, row.size());
-  const int64_t b = static_cast<int64_t>(rows.size()), p = static_cast<int64_t>(longest);
-  text::TextBatch batch;
-  batch.ids = torch::zeros({b, p}, torch::kInt64);
-  batch.word_vectors = torch::zeros({b, p, 0});
-  batch.word_known = torch::zeros({b, p, 1});
-  batch.mask = torch::zeros({b, p}, torch::kBool);
-  for (int64_t i = 0; i < b; ++i) {
-    for (size_t k = 0; k < rows[static_cast<size_t>(i)].size(); ++k) {
-      batch.ids[i][static_cast<int64_t>(k)] = rows[static_cast<size_t>(i)][k];
-      batch.mask[i][static_cast<int64_t>(k)] = true;
-    }
-  }
-  return batch;
-}
+using testing::piece_batch;
 
 double max_difference(const at::Tensor& a, const at::Tensor& b) { return (a - b).abs().max().item<double>(); }
 
@@ -74,7 +59,7 @@ class GptTest : public ::testing::Test {
     model_ = TokenGpt(tiny_config());
     model_->eval();
     skeletons_ = torch::randn({2, gpt::skeleton_feature_width(4)});
-    condition_ = model_->condition(pieces({{2, 3, 4}, {5, 6}}), skeletons_, {});
+    condition_ = model_->condition(piece_batch({{2, 3, 4}, {5, 6}}), skeletons_, {});
     codes_ = torch::randint(0, 8, {2, 6, 3}, torch::kInt64);
     targets_ = torch::cat({codes_, torch::randint(0, 8, {2, 1, 3}, torch::kInt64)}, 1);
   }
@@ -125,8 +110,8 @@ TEST_F(GptTest, NoOutputReadsALaterStep) {
 TEST_F(GptTest, ADroppedCaptionIsTheUnconditionedInput) {
   torch::NoGradGuard no_grad;
   const at::Tensor drop = torch::ones({2}, torch::kBool);
-  const GptCondition dropped_a = model_->condition(pieces({{2, 3, 4}, {5, 6}}), skeletons_, drop);
-  const GptCondition dropped_b = model_->condition(pieces({{9, 9, 9, 9}, {11}}), skeletons_, drop);
+  const GptCondition dropped_a = model_->condition(piece_batch({{2, 3, 4}, {5, 6}}), skeletons_, drop);
+  const GptCondition dropped_b = model_->condition(piece_batch({{9, 9, 9, 9}, {11}}), skeletons_, drop);
   const GptCondition none = model_->unconditioned(skeletons_);
   const at::Tensor a = model_->forward(dropped_a, codes_, targets_).first;
   EXPECT_LT(max_difference(a, model_->forward(dropped_b, codes_, targets_).first), 1e-5);
@@ -254,7 +239,7 @@ TEST(GptLearning, ATinyGptLearnsWhichSequenceEachCaptionMeans) {
   double loss = 0;
   for (int step = 0; step < 150; ++step) {
     adam.zero_grad();
-    const GptCondition c = model->condition(pieces(captions), skeleton, {});
+    const GptCondition c = model->condition(piece_batch(captions), skeleton, {});
     const at::Tensor l = gpt::gpt_loss(model->forward(c, inputs, targets), targets, 2).loss;
     l.backward();
     adam.step();
@@ -269,7 +254,7 @@ TEST(GptLearning, ATinyGptLearnsWhichSequenceEachCaptionMeans) {
   gpt::SequenceLength open;
   open.min_steps = 1;
   open.max_steps = 10;
-  const GptCondition c = model->condition(pieces(captions), skeleton, {});
+  const GptCondition c = model->condition(piece_batch(captions), skeleton, {});
   const std::vector<at::Tensor> drawn = gpt::sample_codes(*model, c, nullptr, {}, open, greedy);
   for (size_t i = 0; i < 2; ++i) {
     ASSERT_EQ(drawn[i].size(0), static_cast<int64_t>(sequences[i].size())) << "caption " << i;

@@ -108,20 +108,7 @@ EvaluatorTrainer::EvaluatorTrainer(const EvaluatorTrainConfig& config, const Dat
   optimizer_ = train::make_adamw(model_->parameters(), config_.optimizer);
 
   const std::vector<int> train_clips = captioned_clips(cache, Split::Train);
-  // Every caption must fit the text encoder: refused here, not at the step that draws it.
-  for (const Split split : {Split::Train, Split::Val}) {
-    for (const int clip : captioned_clips(cache, split)) {
-      for (const std::string& caption : cache.clips[static_cast<size_t>(clip)].captions) {
-        const size_t count = pieces_.split(text::checked_caption(caption, data_name_ + ": clip " + cache.clips[static_cast<size_t>(clip)].id)).ids.size();
-        if (static_cast<int64_t>(count) > config_.model.text.max_pieces) {
-          throw InputError(data_name_, 0,
-                           "clip " + cache.clips[static_cast<size_t>(clip)].id + " has a caption of " +
-                               std::to_string(count) + " pieces, more than model.text.max_pieces = " +
-                               std::to_string(config_.model.text.max_pieces) + " (raise it in the config): '" + caption + "'");
-        }
-      }
-    }
-  }
+  text::check_corpus_captions(cache, pieces_, config_.model.text, data_name_);
   if (static_cast<int64_t>(train_clips.size()) < config_.batch_size) {
     throw InputError(data_name_, 0,
                      "the train split has " + std::to_string(train_clips.size()) +

@@ -5,7 +5,6 @@
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/motion/random.h"
-#include "nec/text/caption_text.h"
 #include "nec/train/checkpoint_io.h"
 #include "nec/train/config_fields.h"
 #include "nec/train/distributed.h"
@@ -127,19 +126,9 @@ GptTrainer::GptTrainer(const GptTrainConfig& config, const DatasetCache& cache, 
     if (tokens_.steps[static_cast<size_t>(row)] < 1) continue;
     if (clip.split == Split::Train) train_rows_.push_back(row);
     if (clip.split == Split::Val) validation_rows_.push_back(row);
-    if (clip.split == Split::Test) continue;
-    for (const std::string& caption : clip.captions) {
-      const std::string where = data_name_ + ": clip " + clip.id;
-      const size_t count = pieces_.split(text::checked_caption(caption, where)).ids.size();
-      if (static_cast<int64_t>(count) > config_.model.text.max_pieces) {
-        throw InputError(data_name_, 0, "clip " + clip.id + " has a caption of " + std::to_string(count) +
-                                            " pieces, more than model.text.max_pieces = " +
-                                            std::to_string(config_.model.text.max_pieces) + " (raise it in the config): '" +
-                                            caption + "'");
-      }
-    }
   }
   if (train_rows_.empty()) throw InputError(data_name_, 0, "the train split has no clip with a caption");
+  text::check_corpus_captions(cache_, pieces_, config_.model.text, data_name_);
 
   torch::manual_seed(config_.seed);
   model_ = TokenGpt(config_.model);

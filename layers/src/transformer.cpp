@@ -29,6 +29,15 @@ at::Tensor masked_mean(const at::Tensor& x, const at::Tensor& mask) {
   return (x * weights).sum(1) / weights.sum(1).clamp_min(1.0);
 }
 
+at::Tensor multi_head_attention(const at::Tensor& qkv, int64_t heads, const at::Tensor& bias) {
+  const int64_t b = qkv.size(0), n = qkv.size(1), d = qkv.size(2) / 3, head_dim = d / heads;
+  const at::Tensor split = qkv.view({b, n, 3, heads, head_dim}).permute({2, 0, 3, 1, 4});  // (3, B, H, N, Dh)
+  at::Tensor scores = torch::matmul(split[0], split[1].transpose(-1, -2)) * (1.0 / std::sqrt(static_cast<double>(head_dim)));
+  if (bias.defined()) scores = scores + bias;
+  const at::Tensor mixed = torch::matmul(torch::softmax(scores, -1), split[2]);  // (B, H, N, Dh)
+  return mixed.permute({0, 2, 1, 3}).reshape({b, n, d});
+}
+
 TransformerLayerImpl::TransformerLayerImpl(const TransformerOptions& options) : heads_(options.heads) {
   options.validate();
   const int64_t dim = options.dim;
@@ -42,13 +51,8 @@ TransformerLayerImpl::TransformerLayerImpl(const TransformerOptions& options) : 
 }
 
 at::Tensor TransformerLayerImpl::forward(const at::Tensor& x, const at::Tensor& bias) {
-  const int64_t b = x.size(0), n = x.size(1), d = x.size(2), head_dim = d / heads_;
-  // (3, B, H, N, Dh)
-  const at::Tensor qkv = qkv_(attention_norm_(x)).view({b, n, 3, heads_, head_dim}).permute({2, 0, 3, 1, 4});
-  at::Tensor scores = torch::matmul(qkv[0], qkv[1].transpose(-1, -2)) * (1.0 / std::sqrt(static_cast<double>(head_dim)));
-  if (bias.defined()) scores = scores + bias;
-  const at::Tensor mixed = torch::matmul(torch::softmax(scores, -1), qkv[2]);  // (B, H, N, Dh)
-  const at::Tensor attended = x + dropout_(out_(mixed.permute({0, 2, 1, 3}).reshape({b, n, d})));
+  const at::Tensor mixed = multi_head_attention(qkv_(attention_norm_(x)), heads_, bias);
+  const at::Tensor attended = x + dropout_(out_(mixed));
   return attended + ffn_out_(dropout_(torch::gelu(ffn_in_(ffn_norm_(attended)))));
 }
 

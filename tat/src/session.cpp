@@ -117,7 +117,14 @@ DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, con
   const Features features =
       decode_clip(*session.model.tokenizer, codes, tokens.frames, session.embed(skeleton, target.canonical_names),
                        skeleton, tokens.fps, session.windows);
-  Clip out{skeleton, decode_features(skeleton, features), {}};
+  return write_onto(target, features, corrections, tokens.heading_degrees, target_path, out_path,
+                    animation_name(tokens));
+}
+
+DecodeReport write_onto(const PreparedClip& target, const Features& features, const DecodeCorrections& corrections,
+                        double heading_degrees, const std::string& target_path, const std::string& out_path,
+                        const std::string& animation) {
+  Clip out{target.clip.skeleton, decode_features(target.clip.skeleton, features), {}};
   DecodeReport report;
   const Clip* source = corrections.source;
   if (source != nullptr && corrections.heading) report.heading = follow_heading(*source, out.skeleton, out.motion);
@@ -126,8 +133,8 @@ DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, con
                                       : settle_on_ground(out.skeleton, out.motion);
   }
   if (corrections.feet) report.feet = lock_feet(out.skeleton, out.motion);
-  out = denormalize(out, with_heading(target.normalization, tokens.heading_degrees));
-  write_clip(out_path, out, target_path, animation_name(tokens));
+  out = denormalize(out, with_heading(target.normalization, heading_degrees));
+  write_clip(out_path, out, target_path, animation);
   return report;
 }
 

@@ -61,6 +61,22 @@ TextBatch TextBatch::to(const c10::Device& device) const {
   return {ids.to(device), word_vectors.to(device), word_known.to(device), mask.to(device)};
 }
 
+void check_corpus_captions(const DatasetCache& cache, const PieceModel& pieces, const TextEncoderConfig& config,
+                           const std::string& data_name) {
+  for (const CacheClip& clip : cache.clips) {
+    if (clip.split == Split::Test) continue;
+    for (const std::string& caption : clip.captions) {
+      const size_t count = pieces.split(checked_caption(caption, data_name + ": clip " + clip.id)).ids.size();
+      if (static_cast<int64_t>(count) > config.max_pieces) {
+        throw InputError(data_name, 0, "clip " + clip.id + " has a caption of " + std::to_string(count) +
+                                           " pieces, more than model.text.max_pieces = " +
+                                           std::to_string(config.max_pieces) + " (raise it in the config): '" +
+                                           caption + "'");
+      }
+    }
+  }
+}
+
 TextBatch make_text_batch(const std::vector<std::string>& captions, const PieceModel& pieces,
                           const WordVectors* vectors, const TextEncoderConfig& config, const std::string& where) {
   if (config.word_dim > 0 && (vectors == nullptr || vectors->dim() != config.word_dim)) {

@@ -44,6 +44,11 @@ at::Tensor padding_bias(const at::Tensor& mask);
 // Mean over the real tokens: x (B, N, D), mask (B, N) bool -> (B, D); zero for an item without tokens.
 at::Tensor masked_mean(const at::Tensor& x, const at::Tensor& mask);
 
+// Scaled dot-product attention of `heads` heads: qkv (B, N, 3 D) the queries,
+// keys and values side by side; bias broadcastable to (B, H, N, N), or
+// undefined. -> (B, N, D), the heads' outputs side by side (before the output projection).
+at::Tensor multi_head_attention(const at::Tensor& qkv, int64_t heads, const at::Tensor& bias);
+
 class TransformerLayerImpl : public torch::nn::Module {
  public:
   explicit TransformerLayerImpl(const TransformerOptions& options);

@@ -76,4 +76,13 @@ struct DecodeReport {
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path, UpAxis up,
                          const DecodeCorrections& corrections, const std::string& out_path);
 
+// What decode_onto does after decoding, for Θ from any model (e.g. a
+// diffusion model's motion): `features` on `target` (the clip of
+// `target_path` prepared for the model), corrected, placed into the file's
+// frame with the heading `heading_degrees`, written to `out_path` with the
+// animation name `animation` (asset outputs).
+DecodeReport write_onto(const PreparedClip& target, const Features& features, const DecodeCorrections& corrections,
+                        double heading_degrees, const std::string& target_path, const std::string& out_path,
+                        const std::string& animation);
+
 }  // namespace nec::tat

@@ -19,6 +19,7 @@
 // the word channel and not only the ids.
 #pragma once
 
+#include "nec/motion/dataset.h"
 #include "nec/text/piece_model.h"
 #include "nec/text/word_vectors.h"
 
@@ -83,6 +84,13 @@ struct TextBatch {
 // empty or letterless caption or one with more than max_pieces pieces.
 TextBatch make_text_batch(const std::vector<std::string>& captions, const PieceModel& pieces,
                           const WordVectors* vectors, const TextEncoderConfig& config, const std::string& where);
+
+// Refuses, before training starts rather than at the step that draws it, a
+// caption of a train or val clip of `cache` that is empty, has no letter or
+// has more than config.max_pieces pieces: InputError naming `data_name`, the
+// clip and the caption.
+void check_corpus_captions(const DatasetCache& cache, const PieceModel& pieces, const TextEncoderConfig& config,
+                           const std::string& data_name);
 
 struct TextEncoding {
   at::Tensor sentence;  // (B, output_dim) pooled sentence vector

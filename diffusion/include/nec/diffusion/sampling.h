@@ -1,0 +1,48 @@
+// Sampling motion from a trained denoiser: DDIM with step skipping (e.g. 50
+// of 1000 timesteps), classifier-free guidance, a seed per sample, long
+// motions as overlapping windows with a caption each (windows.h).
+//
+//   DiffusionSamplingOptions options;  options.steps = 50;  options.guidance = 2.5;  options.seed = 7;
+//   std::vector<at::Tensor> motions = sample_motions(*model, schedule, skeleton, captions, {120}, 4, options);
+//   // each (T, J, kModelChannels) model space on the skeleton, heading 0 at frame 0
+//
+// Guidance: x0 = u + g (c − u) of the unconditioned and conditioned
+// predictions, the two halves run as one batch (g = 1: the conditioned half
+// alone). Sample i starts from the noise of the stream seed + i, so it does
+// not depend on how many samples are drawn with it. DDIM with η = 0 is
+// deterministic after the starting noise.
+#pragma once
+
+#include "nec/diffusion/denoiser.h"
+#include "nec/diffusion/noise_schedule.h"
+
+#include <ATen/core/Tensor.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace nec::diffusion {
+
+struct DiffusionSamplingOptions {
+  int64_t steps = 50;          // denoising steps, 1..noise_steps
+  double guidance = 2.5;       // classifier-free guidance scale g >= 1; 1 = none
+  uint64_t seed = 0;           // sample i starts from the noise of seed + i
+  int64_t overlap_frames = 0;  // frames neighbouring windows share; 0 = a quarter of a window
+
+  // Throws std::invalid_argument naming the bad field.
+  void validate() const;
+};
+
+// `samples` motions (T, J, C) raw model space for one skeleton (B = 1), T the
+// sum of segment_frames, segment s read with caption row s of `captions`
+// (S, D) (MotionDenoiserImpl::caption_condition). Runs under InferenceMode;
+// put the model in eval mode first.
+std::vector<at::Tensor> sample_motions(MotionDenoiserImpl& model, const NoiseSchedule& schedule,
+                                       const SkeletonInputs& skeleton, const at::Tensor& captions,
+                                       const std::vector<int64_t>& segment_frames, int samples,
+                                       const DiffusionSamplingOptions& options);
+
+// (T, J, C) standard normal noise of the stream `seed`.
+at::Tensor seeded_noise(uint64_t seed, int64_t frames, int64_t joints, const c10::Device& device);
+
+}  // namespace nec::diffusion

@@ -1,0 +1,144 @@
+// Training the diffusion model (`nec train diffusion --stage pose|motion`),
+// in two stages as How to Move Your Dragon does (section 5.4, appendix B.1):
+//
+//   stage pose:   a fresh denoiser, spatial blocks only, on single frames
+//                 (pose_frames frames drawn from each item's crop, each a pose
+//                 of its own with its root velocity); the caption encoder
+//                 trains with it.
+//   stage motion: the pose model's weights frozen; the temporal blocks and
+//                 the frame encoding trained on crops of data.window_frames.
+//
+//   DiffusionTrainConfig config = read_diffusion_train_config("configs/diffusion_pose_cpu.json");
+//   DiffusionTrainer trainer(config, DiffusionStage::kPose, cache, "cache/", owo, std::nullopt, "spm.model",
+//                            &vectors, torch::kCPU);
+//   run_training(trainer.loop_schedule(), 0, trainer.hooks("runs/diffusion-pose"));
+//
+// Each item: a crop of a train clip (rig augmentation on the fly, every
+// caption level; a clip without a caption trains the unconditioned model),
+// in standardized model space; a timestep t uniform in [0, noise_steps);
+// x_t = add_noise(x0, ε). Loss: mean squared error of the predicted x0 over
+// the item's real frames, joints and the channels each joint uses, averaged
+// per item, then over the batch. Caption dropout (for classifier-free
+// guidance) replaces an item's caption by the learnt null caption.
+// Validation: the same loss on the val clips (no augmentation or dropout),
+// at fixed timesteps and noise, so that it is comparable between checkpoints.
+#pragma once
+
+#include "nec/diffusion/checkpoint.h"
+#include "nec/diffusion/noise_schedule.h"
+#include "nec/motion/batch.h"
+#include "nec/train/clip_batches.h"
+#include "nec/train/loop.h"
+#include "nec/train/optimizer.h"
+
+#include <torch/optim/adamw.h>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace nec::train {
+class Communicator;
+class ConfigVisitor;
+}
+
+namespace nec::diffusion {
+
+// The optimizer a diffusion config starts from: peak 2e-4, warm-up 100, weight decay 0, clip 1.
+inline train::OptimizerConfig default_diffusion_optimizer() {
+  train::OptimizerConfig config;
+  config.learning_rate = 2e-4;
+  config.final_lr_fraction = 0.1;
+  config.warmup_steps = 100;
+  config.weight_decay = 0.0;
+  config.grad_clip = 1.0;
+  return config;
+}
+
+struct DiffusionTrainConfig {
+  DenoiserConfig model;            // the pose stage's; the motion stage takes the pose model's
+  train::OptimizerConfig optimizer = default_diffusion_optimizer();
+  train::ClipBatchConfig data;     // crops, joint buckets, rig augmentation
+  int64_t pose_frames = 8;         // pose stage: frames drawn from each item's crop
+  double caption_dropout = 0.1;    // chance an item's caption is dropped (classifier-free guidance)
+  int64_t steps = 3000;            // the step training ends at
+  int64_t batch_size = 32;         // items per step over all ranks
+  int64_t log_every = 20;          // progress line cadence off a terminal; 0 = only the last step
+  int64_t validate_every = 250;    // validation every N steps and at the end; 0 = never
+  int64_t checkpoint_every = 500;  // checkpoint every N steps; 0 = only at the end
+  uint64_t seed = 0;               // initial weights, batches and every step's random draws
+
+  // Throws std::invalid_argument naming the first bad field.
+  void validate() const;
+};
+void visit_fields(train::ConfigVisitor& v, DiffusionTrainConfig& c);
+
+// Every field optional; unknown fields are an error. InputError naming the file and the field.
+DiffusionTrainConfig read_diffusion_train_config(const std::string& path);
+
+// Masked mean squared error: predicted and target (B, T, J, C), used (B, T, J, C) bool; per item, then summed
+// over items and divided by global_items. -> ()
+at::Tensor denoising_loss(const at::Tensor& predicted, const at::Tensor& target, const at::Tensor& used,
+                          int64_t global_items);
+
+class DiffusionTrainer {
+ public:
+  // Stage pose: a fresh denoiser (weights from config.seed; piece embeddings
+  // from the word vectors where a piece is a whole word; data statistics from
+  // the train clips) with the frozen `owo`. Stage motion: the denoiser of
+  // `pose` (a pose-stage checkpoint, or the motion-stage one being resumed)
+  // with its pose model's weights frozen. `vectors`: the word vectors the text and OwO encoders
+  // read (null when neither does). InputError when the train split is
+  // smaller than a batch or a caption is longer than the text encoder takes.
+  DiffusionTrainer(const DiffusionTrainConfig& config, DiffusionStage stage, const DatasetCache& cache,
+                   std::string data_name, owo::OwoPretrainer owo, std::optional<LoadedDiffusion> pose,
+                   const std::string& piece_model_path, const text::WordVectors* vectors, const c10::Device& device,
+                   const train::Communicator* ranks = nullptr);
+  ~DiffusionTrainer();
+  DiffusionTrainer(const DiffusionTrainer&) = delete;
+  DiffusionTrainer& operator=(const DiffusionTrainer&) = delete;
+
+  // Loads the model, optimizer, schedule and batch position of the training checkpoint `dir`; returns its step.
+  int64_t resume(const std::string& dir);
+  // One optimizer step (1-based) on the next batch: {"loss", "lr"}.
+  train::LossTerms step(int64_t step);
+  // {"val_loss"} on the val clips (nullopt without any).
+  std::optional<train::LossTerms> validate();
+  void save(const std::string& dir, int64_t step);
+
+  train::TrainingSchedule loop_schedule() const;
+  train::TrainingHooks hooks(const std::string& out_dir);
+
+  MotionDenoiser& model() { return model_; }
+  DiffusionStage stage() const { return stage_; }
+  int64_t trained_parameter_count() const;
+  int train_clip_count() const { return train_->clip_count(); }
+  bool has_validation() const { return validation_ != nullptr; }
+
+ private:
+  // The loss of a batch, each item's draws from draw_seed and its place in the whole batch;
+  // `validation`: no caption dropout.
+  at::Tensor loss_of(const Batch& batch, bool validation, uint64_t draw_seed);
+  std::vector<at::Tensor> trained_parameters();
+  void train_mode();
+
+  DiffusionTrainConfig config_;
+  DiffusionStage stage_;
+  const DatasetCache& cache_;
+  std::string data_name_;
+  owo::OwoPretrainer owo_;
+  text::PieceModel pieces_;
+  std::string piece_model_bytes_;
+  const text::WordVectors* vectors_;
+  c10::Device device_;
+  const train::Communicator* ranks_;
+  NoiseSchedule schedule_;
+  MotionDenoiser model_{nullptr};
+  std::unique_ptr<BatchLoader> train_, validation_;
+  std::unique_ptr<torch::optim::AdamW> optimizer_;
+  train::LearningRateSchedule lr_schedule_;
+};
+
+}  // namespace nec::diffusion
