@@ -33,7 +33,10 @@ struct PeerRun {
   double losses[2];
 };
 constexpr PeerRun kPeerRuns[] = {{22, {26.410891, 26.393688}}, {100, {27.122942, 27.117390}}};
-constexpr double kTolerance = 2e-6;  // relative: the peer prints 8 significant digits
+// Relative, step by step. Step 1: the peer prints 8 significant digits. Step 2 follows one AdamW update, which
+// moves a parameter whose gradient is only rounding noise by the full learning rate, in a direction the CPU's
+// summation order decides (seen: 1.8e-5 at 100 joints on an AVX-512 AMD EPYC, 1e-8 elsewhere).
+constexpr double kTolerance[2] = {2e-6, 5e-5};
 
 TEST(TatPeerStep, FirstTwoLossesEqualThePythonPeers) {
   torch::set_num_threads(1);
@@ -52,10 +55,10 @@ TEST(TatPeerStep, FirstTwoLossesEqualThePythonPeers) {
       largest = std::max(largest, relative);
       std::printf("%lld joints, step %lld: C++ %.6f, Python peer %.6f, relative difference %.2g\n",
                   static_cast<long long>(peer.joints), static_cast<long long>(step), loss, expected, relative);
-      EXPECT_LT(relative, kTolerance) << peer.joints << " joints, step " << step;
+      EXPECT_LT(relative, kTolerance[step - 1]) << peer.joints << " joints, step " << step;
     }
   }
-  std::printf("largest relative difference: %.2g (tolerance %.1g)\n", largest, kTolerance);
+  std::printf("largest relative difference: %.2g\n", largest);
 }
 
 }  // namespace
