@@ -4,10 +4,9 @@
 
 #include "nec/assets/asset_reader.h"
 #include "nec/motion/error.h"
+#include "nec/train/heap.h"
 
 #include <fmt/format.h>
-
-#include <malloc.h>
 
 #include <cstring>
 #include <string>
@@ -49,10 +48,7 @@ void print_overview() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Model tensors of tens of MB are allocated and freed every step; glibc would
-  // map and unmap each one (page faults on every touch). Keep them in the heap.
-  mallopt(M_MMAP_THRESHOLD, 1 << 30);
-  mallopt(M_TRIM_THRESHOLD, 1 << 30);
+  nec::train::keep_large_allocations_in_heap();
   nec::assets::register_asset_formats();  // every command reads FBX / glTF / Collada / .x as well as BVH
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
     print_overview();

@@ -18,6 +18,7 @@
 #include "nec/diffusion/sampling.h"
 #include "nec/diffusion/training.h"
 #include "nec/layers/transformer.h"
+#include "nec/train/heap.h"
 
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
@@ -118,6 +119,7 @@ BENCHMARK(BM_Attention)
     ->Repetitions(kRepetitions);
 
 int main(int argc, char** argv) {
+  nec::train::keep_large_allocations_in_heap();  // as nec does
   torch::set_num_threads(static_cast<int>(std::thread::hardware_concurrency()));  // every core (2 here)
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();

@@ -27,6 +27,7 @@
 #include "nec/text/piece_model.h"
 #include "nec/text/text_encoder.h"
 #include "nec/text/word_vectors.h"
+#include "nec/train/heap.h"
 
 #include <benchmark/benchmark.h>
 #include <nlohmann/json.hpp>
@@ -219,6 +220,7 @@ void register_all() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  nec::train::keep_large_allocations_in_heap();  // as nec does
   std::vector<char*> args(argv, argv + argc);
   std::string repetitions = "--benchmark_repetitions=" + std::to_string(kDefaultRepetitions);
   bool has_repetitions = false;

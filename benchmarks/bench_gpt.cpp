@@ -18,6 +18,7 @@
 #include "nec/gpt/training.h"
 #include "nec/motion/bvh.h"
 #include "nec/text/word_vectors.h"
+#include "nec/train/heap.h"
 #include "nec/zoo/creature.h"
 
 #include <benchmark/benchmark.h>
@@ -148,6 +149,7 @@ BENCHMARK(BM_SampleTokens)
     ->UseRealTime();
 
 int main(int argc, char** argv) {
+  nec::train::keep_large_allocations_in_heap();  // as nec does
   std::vector<char*> args;
   bool repetitions = false;
   for (int i = 0; i < argc; ++i) {

@@ -29,9 +29,10 @@
 #include "nec/tat/fk.h"
 #include "nec/tat/inference.h"
 #include "nec/tat/loss.h"
-#include "nec/tat/tokenizer.h"
 #include "nec/tat/synthetic.h"
+#include "nec/tat/tokenizer.h"
 #include "nec/tat/training.h"
+#include "nec/train/heap.h"
 
 #include <benchmark/benchmark.h>
 #include <malloc.h>
@@ -264,6 +265,7 @@ void register_all() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  nec::train::keep_large_allocations_in_heap();  // as nec does
   std::vector<char*> args(argv, argv + argc);
   std::string repetitions = "--benchmark_repetitions=" + std::to_string(kDefaultRepetitions);
   bool has_repetitions = false;
