@@ -7,14 +7,12 @@
 #include "nec/diffusion/checkpoint.h"
 #include "nec/motion/bvh.h"
 #include "nec/motion/files.h"
-#include "nec/motion/rotations.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <torch/torch.h>
 
-#include <algorithm>
 #include <filesystem>
 #include <string>
 
@@ -24,6 +22,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::CommandResult;
 using testing::contains;
+using testing::largest_rotation_difference;
 using testing::run_nec;
 
 constexpr const char* kPoseConfig = R"({
@@ -35,16 +34,6 @@ constexpr const char* kPoseConfig = R"({
 constexpr const char* kMotionConfig = R"({
   "data": {"window_frames": 16}, "optimizer": {"learning_rate": 0.003, "warmup_steps": 1},
   "batch_size": 4, "steps": 4, "log_every": 1, "validate_every": 0, "checkpoint_every": 0, "seed": 2})";
-
-// The largest angle (radians) between two motions' joint rotations, frame by frame.
-double largest_rotation_difference(const Motion& a, const Motion& b) {
-  EXPECT_EQ(a.rotations.size(), b.rotations.size());
-  double largest = 0.0;
-  for (size_t i = 0; i < std::min(a.rotations.size(), b.rotations.size()); ++i) {
-    largest = std::max(largest, geodesic_distance(a.rotations[i], b.rotations[i]));
-  }
-  return largest;
-}
 
 class CliDiffusion : public testing::SharedFolderTest {
  protected:

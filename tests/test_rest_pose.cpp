@@ -17,6 +17,7 @@
 namespace nec {
 namespace {
 
+using testing::largest_rotation_difference;
 using testing::max_position_difference;
 
 std::vector<Vec3> world_positions(const Clip& clip) {
@@ -25,12 +26,6 @@ std::vector<Vec3> world_positions(const Clip& clip) {
   const std::vector<Vec3> sites = end_site_positions(clip.skeleton, forward_kinematics(clip.skeleton, clip.motion));
   positions.insert(positions.end(), sites.begin(), sites.end());
   return positions;
-}
-
-double largest_rotation_difference(const Motion& a, const Motion& b) {
-  double worst = 0.0;
-  for (size_t i = 0; i < a.rotations.size(); ++i) worst = std::max(worst, geodesic_distance(a.rotations[i], b.rotations[i]));
-  return worst;
 }
 
 double largest_offset_difference(const Skeleton& a, const Skeleton& b) {

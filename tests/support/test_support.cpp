@@ -1,6 +1,8 @@
 // Shared helpers for the tests.
 #include "test_support.h"
 
+#include "nec/motion/rotations.h"
+
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -143,6 +145,13 @@ double max_position_difference(const std::vector<Vec3>& a, const std::vector<Vec
   if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
   double worst = 0.0;
   for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, (a[i] - b[i]).norm());
+  return worst;
+}
+
+double largest_rotation_difference(const Motion& a, const Motion& b) {
+  if (a.rotations.size() != b.rotations.size()) return std::numeric_limits<double>::infinity();
+  double worst = 0.0;
+  for (size_t i = 0; i < a.rotations.size(); ++i) worst = std::max(worst, geodesic_distance(a.rotations[i], b.rotations[i]));
   return worst;
 }
 

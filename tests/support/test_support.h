@@ -88,4 +88,7 @@ void stretch_root_travel(Motion& motion, double factor);
 // Largest distance between corresponding positions of two pose sets.
 double max_position_difference(const std::vector<Vec3>& a, const std::vector<Vec3>& b);
 
+// Largest angle (radians) between corresponding joint rotations of two motions; infinity if their sizes differ.
+double largest_rotation_difference(const Motion& a, const Motion& b);
+
 }  // namespace nec::testing
