@@ -1,6 +1,8 @@
 // Pre-norm transformer layers with padding masks.
 #include "nec/layers/transformer.h"
 
+#include "nec/layers/batched_matmul.h"
+
 #include <torch/torch.h>
 
 #include <cmath>
@@ -35,9 +37,9 @@ at::Tensor multi_head_attention(const at::Tensor& qkv, int64_t heads, const at::
   // BLAS call per matrix through a slow path (twice the time for 24-token sequences).
   const at::Tensor split = qkv.view({b, n, 3, heads, head_dim}).permute({2, 0, 3, 1, 4}).reshape({3, b * heads, n, head_dim});
   const at::Tensor keys = split[1].transpose(1, 2).contiguous();
-  at::Tensor scores = torch::bmm(split[0] * (1.0 / std::sqrt(static_cast<double>(head_dim))), keys).view({b, heads, n, n});
+  at::Tensor scores = batched_matmul(split[0] * (1.0 / std::sqrt(static_cast<double>(head_dim))), keys).view({b, heads, n, n});
   if (bias.defined()) scores = scores + bias;
-  const at::Tensor mixed = torch::bmm(torch::softmax(scores, -1).view({b * heads, n, n}), split[2]);  // (B * H, N, Dh)
+  const at::Tensor mixed = batched_matmul(torch::softmax(scores, -1).view({b * heads, n, n}), split[2]);  // (B * H, N, Dh)
   return mixed.view({b, heads, n, head_dim}).permute({0, 2, 1, 3}).reshape({b, n, d});
 }
 
