@@ -27,6 +27,7 @@
 #       < 3 s on 2 cores) and a batch of 8, peak memory; and one layer's
 #       factorized attention against full spatio-temporal attention for
 #       J = 20, 60, 140 joints and T = 60, 120, 240 frames. About 10 minutes.
+#       OpenMP's default wait policy (as nec runs) unless OMP_WAIT_POLICY is set.
 #   scripts/bench.sh assets
 #       Rigged assets: reading FBX and GLB (assimp) against reading BVH, on the
 #       Debian CMU files and a zoo dragon exported by Blender 3.4

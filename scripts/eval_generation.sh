@@ -3,27 +3,35 @@
 # a motion for the clip's first caption onto the clip's own skeleton file, as long as the clip; then
 # `nec eval t2m` compares them with the real clips (R-Precision, FID, MM-Dist, Diversity, Coverage/Novelty,
 # jitter), per dataset.
-#   scripts/eval_generation.sh MODEL CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES]     # MODEL: a GPT or diffusion checkpoint
-# SPLIT: test (default) or val; SAMPLES per caption (default 1; 2 or more also give Multimodality).
+#   scripts/eval_generation.sh MODEL CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES] [CLIPS]     # MODEL: a GPT or diffusion checkpoint
+# SPLIT: test (default) or val; SAMPLES per caption (default 1; 2 or more also give Multimodality);
+# CLIPS: at most this many clips of each dataset, evenly spaced in the manifest's order (default: all).
 # Writes OUT_DIR/generated/<dataset>/<the source's folder>/*.bvh (+ caption sidecars; the zoo's folders
 # cNNN_<plan> give `nec eval t2m` the body plan), OUT_DIR/t2m.md and OUT_DIR/t2m.json.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 4 ]; then
-  echo "usage: scripts/eval_generation.sh MODEL CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES]" >&2
+  echo "usage: scripts/eval_generation.sh MODEL CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES] [CLIPS]" >&2
   exit 2
 fi
-model=$1 cache=$2 evaluator=$3 out=$4 split=${5:-test} samples=${6:-1}
+model=$1 cache=$2 evaluator=$3 out=$4 split=${5:-test} samples=${6:-1} clips=${7:-0}
 nec=${NEC:-build/apps/nec}
 mkdir -p "$out/generated"
 started=$SECONDS
 # One line per clip: dataset, source file, seconds, first caption (tab-separated).
-python3 - "$cache/manifest.json" "$split" > "$out/clips.tsv" <<'PY'
-import json, sys
+python3 - "$cache/manifest.json" "$split" "$clips" > "$out/clips.tsv" <<'PY'
+import collections, json, sys
 manifest = json.load(open(sys.argv[1]))
+limit = int(sys.argv[3])
+by_dataset = collections.defaultdict(list)
 for clip in manifest["clips"]:
     if clip["split"] == sys.argv[2] and clip["captions"]:
-        print("\t".join([clip["dataset"], clip["source"], "%.3f" % (clip["frames"] / clip["fps"]), clip["captions"][0]]))
+        by_dataset[clip["dataset"]].append(clip)
+for dataset, clips in by_dataset.items():
+    if 0 < limit < len(clips):
+        clips = [clips[i * len(clips) // limit] for i in range(limit)]
+    for clip in clips:
+        print("\t".join([dataset, clip["source"], "%.3f" % (clip["frames"] / clip["fps"]), clip["captions"][0]]))
 PY
 count=0
 while IFS=$'\t' read -r dataset source seconds caption; do

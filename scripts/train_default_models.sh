@@ -4,9 +4,10 @@
 # plan but the hexapod, kept out so the demo can show a plan the models never saw) and Debian's CMU
 # files. Not ../shared/data: its licenses are non-commercial.
 #   scripts/train_default_models.sh [WORK_DIR] [OUT_DIR]     # defaults: out/default-models, models/default
-# 85 minutes on 2 cores here (the tokenizer and the evaluator, side by side, take most of it). Writes OUT_DIR/{gpt,evaluator} (the GPT holds its tokenizer in gpt/tat,
-# which holds its OwO encoder) without their training state, and OUT_DIR/README.md's numbers come from
-# the `nec eval` lines this script prints at the end.
+# About 110 minutes on 2 cores here (the tokenizer and the evaluator, side by side, take 70 of them, the
+# diffusion model's two stages 20). Writes OUT_DIR/{gpt,evaluator,diffusion} (the GPT holds its tokenizer in
+# gpt/tat, which holds its OwO encoder; the diffusion model holds a copy of that encoder) without their
+# training state; OUT_DIR/README.md (kept) says how its numbers were measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${1:-out/default-models} out=${2:-models/default}
@@ -39,11 +40,18 @@ step "GPT"
 "$nec" train gpt --config configs/gpt_cpu.json --data "$work/cache" --tat "$work/tat" --pieces "$work/spm.model" \
   --out "$work/gpt" --threads 2 --force
 
+step "diffusion model: the pose stage, then the motion stage on it"
+"$nec" train diffusion --stage pose --config configs/diffusion_pose_cpu.json --data "$work/cache" --owo "$work/owo" \
+  --pieces "$work/spm.model" --out "$work/diffusion_pose" --threads 2 --force
+"$nec" train diffusion --stage motion --config configs/diffusion_motion_cpu.json --data "$work/cache" \
+  --pose "$work/diffusion_pose" --out "$work/diffusion" --threads 2 --force
+
 step "copy into $out (models only, no training state)"
 rm -rf "$out.tmp"
 mkdir -p "$out.tmp"
 cp -r "$work/gpt" "$out.tmp/gpt"
 cp -r "$work/evaluator/best" "$out.tmp/evaluator"
+cp -r "$work/diffusion" "$out.tmp/diffusion"
 find "$out.tmp" \( -name training.json -o -name optimizer.pt \) -delete
 rm -rf "$out.tmp/evaluator/best"
 [ -f "$out/README.md" ] && cp "$out/README.md" "$out.tmp/README.md"

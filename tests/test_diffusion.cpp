@@ -284,6 +284,28 @@ TEST(DiffusionSampling, SamplesRepeatBySeedSampleBySample) {
                std::invalid_argument);
 }
 
+TEST(DiffusionLoss, VelocityLossSeesJitterNotAnOffsetAndSkipsUnusedFrames) {
+  const at::Tensor target = torch::randn({2, 6, 3, kC});
+  at::Tensor used = torch::ones({2, 6, 3, kC}, torch::kBool);
+  // A prediction off by the same amount in every frame has the target's velocities.
+  EXPECT_NEAR(diffusion::velocity_loss(target + 0.7, target, used, 2).item<double>(), 0.0, 1e-10);
+  EXPECT_NEAR(diffusion::denoising_loss(target + 0.7, target, used, 2).item<double>(), 0.49, 1e-5);
+  // Item 0 off by +e, -e, +e, ... in every channel: each of its 5 frame differences is off by 2e.
+  const double e = 0.1;
+  const at::Tensor signs = torch::tensor({1.0f, -1.0f, 1.0f, -1.0f, 1.0f, -1.0f}).view({1, 6, 1, 1});
+  at::Tensor predicted = target.clone();
+  predicted[0] += e * signs[0];
+  EXPECT_NEAR(diffusion::velocity_loss(predicted, target, used, 2).item<double>(), 4 * e * e / 2, 1e-6);
+  // The last two frames of item 0 unused: its differences are those among frames 0-3, still 2e each; the
+  // frame after an unused one never counts.
+  used[0].narrow(0, 4, 2).fill_(false);
+  predicted[0][5] += 100.0;
+  EXPECT_NEAR(diffusion::velocity_loss(predicted, target, used, 2).item<double>(), 4 * e * e / 2, 1e-6);
+  // Item 1 jitters too: both items count, per item, over all items.
+  predicted[1] += 2 * e * signs[0];
+  EXPECT_NEAR(diffusion::velocity_loss(predicted, target, used, 2).item<double>(), (4 * e * e + 16 * e * e) / 2, 1e-6);
+}
+
 TEST(DiffusionLearning, ATinyDenoiserLearnsWhichMotionEachCaptionMeans) {
   // Caption A: joint 1 swings with sin(t); caption B: with −sin(t). Learnt in
   // standardized space from the data's statistics, sampled with guidance.

@@ -57,6 +57,7 @@ void DiffusionTrainConfig::validate() const {
   require(data.window_frames <= model.max_frames, "data.window_frames must be <= model.max_frames");
   require(pose_frames >= 1, "pose_frames must be >= 1");
   require(caption_dropout >= 0 && caption_dropout < 1, "caption_dropout must be in [0, 1)");
+  require(velocity_weight >= 0, "velocity_weight must be >= 0");
   require(steps >= 1 && batch_size >= 1, "steps and batch_size must be >= 1");
   require(train::valid_cadence(log_every, validate_every, checkpoint_every), train::kCadenceRule);
 }
@@ -67,6 +68,7 @@ void visit_fields(train::ConfigVisitor& v, DiffusionTrainConfig& c) {
   v.object("data", c.data, "training crops, joint-count buckets, rig augmentation");
   v.field("pose_frames", c.pose_frames, "pose stage: frames drawn from each item's crop, each a pose of its own");
   v.field("caption_dropout", c.caption_dropout, "chance an item's caption is dropped (classifier-free guidance)");
+  v.field("velocity_weight", c.velocity_weight, "motion stage: weight of the frame-to-frame difference loss beside the x0 loss");
   v.field("batch_size", c.batch_size, "items per step over all processes");
   train::visit_cadence_fields(v, c.steps, c.log_every, c.validate_every, c.checkpoint_every);
   v.field("seed", c.seed, "initial weights, batches and every step's random draws");
@@ -81,6 +83,14 @@ at::Tensor denoising_loss(const at::Tensor& predicted, const at::Tensor& target,
   const at::Tensor weight = used.to(predicted.scalar_type());
   const at::Tensor per_item = ((predicted - target).square() * weight).sum({1, 2, 3}) / weight.sum({1, 2, 3}).clamp_min(1.0);
   return per_item.sum() / static_cast<double>(global_items);
+}
+
+at::Tensor velocity_loss(const at::Tensor& predicted, const at::Tensor& target, const at::Tensor& used,
+                         int64_t global_items) {
+  const int64_t frames = predicted.size(1);
+  const auto velocity = [&](const at::Tensor& x) { return x.narrow(1, 1, frames - 1) - x.narrow(1, 0, frames - 1); };
+  return denoising_loss(velocity(predicted), velocity(target), used.narrow(1, 1, frames - 1) & used.narrow(1, 0, frames - 1),
+                        global_items);
 }
 
 DiffusionTrainer::DiffusionTrainer(const DiffusionTrainConfig& config, DiffusionStage stage, const DatasetCache& cache,
@@ -227,7 +237,10 @@ at::Tensor DiffusionTrainer::loss_of(const Batch& batch, bool validation, uint64
   const at::Tensor condition =
       model_->caption_condition(text.to(device_), torch::tensor(dropped, torch::kInt64).to(torch::kBool).to(device_));
   const at::Tensor predicted = model_->forward(x_t, t, condition, skeletons, frame_mask, temporal);
-  return denoising_loss(predicted, x0, used, validation ? b : batch.global_size);
+  const int64_t items = validation ? b : batch.global_size;
+  at::Tensor loss = denoising_loss(predicted, x0, used, items);
+  if (temporal && config_.velocity_weight > 0) loss = loss + config_.velocity_weight * velocity_loss(predicted, x0, used, items);
+  return loss;
 }
 
 train::LossTerms DiffusionTrainer::step(int64_t step) {

@@ -63,6 +63,7 @@ struct DiffusionTrainConfig {
   train::ClipBatchConfig data;     // crops, joint buckets, rig augmentation
   int64_t pose_frames = 8;         // pose stage: frames drawn from each item's crop
   double caption_dropout = 0.1;    // chance an item's caption is dropped (classifier-free guidance)
+  double velocity_weight = 0.0;    // motion stage: weight of velocity_loss beside the x0 loss
   int64_t steps = 3000;            // the step training ends at
   int64_t batch_size = 32;         // items per step over all ranks
   int64_t log_every = 20;          // progress line cadence off a terminal; 0 = only the last step
@@ -82,6 +83,11 @@ DiffusionTrainConfig read_diffusion_train_config(const std::string& path);
 // over items and divided by global_items. -> ()
 at::Tensor denoising_loss(const at::Tensor& predicted, const at::Tensor& target, const at::Tensor& used,
                           int64_t global_items);
+
+// The same over frame-to-frame differences (a frame and the one before, both used): what the x0 loss of
+// each frame alone does not see, the jitter between frames whose errors are independent. -> ()
+at::Tensor velocity_loss(const at::Tensor& predicted, const at::Tensor& target, const at::Tensor& used,
+                         int64_t global_items);
 
 class DiffusionTrainer {
  public:
