@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "model_options.h"
 
+#include "nec/diffusion/generation.h"
 #include "nec/evaluator/retrieval.h"
 #include "nec/evaluator/retrieval_index.h"
 #include "nec/gpt/generation.h"
@@ -24,6 +25,7 @@
 #include <chrono>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <set>
 
 namespace nec::app {
@@ -59,8 +61,9 @@ void write_page(const fs::path& path, const std::string& title, const std::vecto
 }
 
 // The three uses with the default models (models/default/): transfers between body plans, generation from each
-// plan's own short caption (the hexapod is a plan the default models never saw) and text queries against the
-// demo's cache. `clips_by_plan`: the first zoo clip of each plan with its short caption. Returns the pages written.
+// plan's own short caption (the hexapod is a plan the default models never saw) by the GPT and, for the first
+// plans, by the diffusion model beside it, and text queries against the demo's cache. `clips_by_plan`: the first
+// zoo clip of each plan with its short caption. Returns the pages written.
 std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& out,
                                                                 const std::vector<std::pair<std::string, std::string>>& clips_by_plan,
                                                                 const DatasetCache& cache) {
@@ -98,9 +101,14 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
     pages.emplace_back("Transfer: each clip onto the next body plan", "models/transfers");
   }
 
-  // Generation: each plan's own short caption, 4 s, on its skeleton.
+  // Generation: each plan's own short caption, 4 s, on its skeleton; the diffusion model's motion for the same
+  // caption beside the GPT's for the first plans (a 4-s sample takes it seconds where the GPT takes a fraction).
   std::vector<viewer::ViewClip> generated;
   gpt::SamplingOptions sampling;
+  const std::string diffusion_dir = default_model_dir("diffusion");
+  std::optional<diffusion::DiffusionSession> diffusion_session;
+  if (!diffusion_dir.empty()) diffusion_session.emplace(diffusion::open_diffusion(diffusion_dir, ""));
+  int diffused = 0;
   for (size_t i = 0; i < clips_by_plan.size() && i < 5; ++i) {
     const auto& [skeleton_path, caption] = clips_by_plan[i];
     const PreparedClip target = tat::prepare_for_model(skeleton_path, fps, UpAxis::Auto);
@@ -110,6 +118,20 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
     tat::decode_onto(session.tokenizer, session.token_file(codes, caption), skeleton_path, UpAxis::Auto, {}, result);
     generated.push_back(viewer::load_view_clip(result));
     generated.back().captions = {caption};
+    if (diffusion_session && i < 3) {
+      const PreparedClip on_skeleton = tat::prepare_for_model(skeleton_path, diffusion_session->fps(), UpAxis::Auto);
+      diffusion::DiffusionSamplingOptions options;  // 50 steps, guidance 2.5
+      options.seed = i;
+      const Features motion = diffusion::generate_motions(*diffusion_session, on_skeleton,
+                                                          {{caption, std::lround(4.0 * diffusion_session->fps())}}, 1, options)
+                                  .front();
+      const std::string diffused_path = (models / fmt::format("generated_{}_diffusion.bvh", i + 1)).string();
+      tat::write_onto(on_skeleton, motion, {}, 0.0, skeleton_path, diffused_path, caption);
+      generated.push_back(viewer::load_view_clip(diffused_path));
+      generated.back().name += " (diffusion)";
+      generated.back().captions = {caption};
+      ++diffused;
+    }
   }
   // Two captions in a row on the biped: the second segment goes on from the codes of the first, and the
   // decoder reads across the seam at 3 s (docs/generation.md, Several captions).
@@ -127,7 +149,10 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
     generated.back().captions = {"0-3 s: " + segments[0].caption, "3-6 s: " + segments[1].caption};
   }
   if (!generated.empty()) {
-    write_page(models / "generated.html", "nec demo: generated from text, one body plan each, and two captions in a row",
+    write_page(models / "generated.html",
+               diffused > 0 ? "nec demo: generated from text, one body plan each (the GPT's, then the diffusion model's), "
+                              "and two captions in a row"
+                            : "nec demo: generated from text, one body plan each, and two captions in a row",
                generated);
     pages.emplace_back("Generate: motion from a caption on each body plan", "models/generated");
   }
@@ -149,8 +174,8 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
   }
   write_page(models / "retrieved.html", "nec demo: the top 3 clips of the cache for three captions", matches);
   pages.emplace_back("Retrieve: the cache's best clips for three captions", "models/retrieved");
-  fmt::print("default models: {} transfers, {} generated clips, 3 queries in {:.1f} s ({})\n", transfers.size() / 2,
-             generated.size(), seconds_since(start), models.string());
+  fmt::print("default models: {} transfers, {} generated clips ({} by diffusion), 3 queries in {:.1f} s ({})\n",
+             transfers.size() / 2, generated.size(), diffused, seconds_since(start), models.string());
   return pages;
 }
 
@@ -162,7 +187,7 @@ int run_demo(int argc, char** argv) {
                   "the CMU motion capture files from Debian (and --extra inputs) into a dataset cache, print a\n"
                   "table per body plan, and write normalized and rig-augmented BVH, PNG strips and viewer pages.\n"
                   "With the default models (models/default): transfers between the body plans, motion generated\n"
-                  "from each plan's caption, and three text queries against the cache. DIR/index.html shows all.");
+                  "from each plan's caption (by the GPT and the diffusion model), and three text queries against the cache. DIR/index.html shows all.");
   cli.option("--out", "DIR", "out/demo", "output folder (its zoo/, cache/, bvh/, strips/, models/ and *.html are replaced)");
   cli.option("--creatures", "N", "9", "zoo creatures (one per body plan for 9)");
   cli.option("--clips-per-creature", "M", "3", "zoo clips per creature");

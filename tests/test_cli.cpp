@@ -201,6 +201,14 @@ TEST_F(Cli, DemoWritesCacheBvhStripsAndPages) {
       EXPECT_TRUE(contains(read_file(path("demo/index.html")), "models/" + page + ".html")) << page;
     }
     for (int i = 1; i <= 3; ++i) EXPECT_NO_THROW(read_bvh(path("demo/models/generated_" + std::to_string(i) + ".bvh")));
+    // The diffusion model's 4-s motion beside the GPT's, on the same skeleton, for each of the three plans.
+    EXPECT_TRUE(contains(run.output, "(3 by diffusion)")) << run.output;
+    for (int i = 1; i <= 3; ++i) {
+      const std::string stem = "demo/models/generated_" + std::to_string(i);
+      const Clip diffused = read_bvh(path(stem + "_diffusion.bvh"));
+      EXPECT_EQ(diffused.motion.frame_count, 120) << i;
+      EXPECT_EQ(diffused.skeleton.joint_count(), read_bvh(path(stem + ".bvh")).skeleton.joint_count()) << i;
+    }
     // Two captions of 3 s each (22 token steps of 4 frames at 30 fps) make one motion of both.
     EXPECT_EQ(read_bvh(path("demo/models/generated_two_captions.bvh")).motion.frame_count, 2 * 22 * 4);
     EXPECT_TRUE(contains(read_file(path("demo/models/generated.html")), "3-6 s: a person turns to the left"));
