@@ -50,6 +50,7 @@ json measurements_json(const MotionMeasurements& m) {
           {"feet", m.gait.feet},
           {"contact_fraction", m.gait.contact_fraction},
           {"touchdowns_per_second", m.gait.touchdowns_per_second},
+          {"touchdowns_per_foot_second", m.gait.touchdowns_per_foot_second},
           {"foot_skate", number(m.gait.skate)},
           {"lowest_heights", m.lowest_heights},
           {"bone_length_change", m.bone_length_change}};
@@ -62,7 +63,7 @@ int run_eval_transfer(int argc, char** argv) {
                   "Compare transferred clips with their sources (pairs SRC.bvh OUT.bvh, e.g. from `nec transfer`), each\n"
                   "in its own body sizes (skeleton diameters): root speed and their ratio (1 = as many body sizes per\n"
                   "second), heading change, direction of travel against the facing (0 = forward), feet that plant\n"
-                  "(leaf joints near the floor and nearly still) with touchdowns per second, foot skate (how fast leaf\n"
+                  "(leaf joints near the floor and nearly still) with touchdowns per second (all feet; per foot), foot skate (how fast leaf\n"
                   "joints near the floor move), the floor difference (the largest gap, window by window of 1 s, between\n"
                   "where the two lowest joints stand above their files' ground), the largest bone-length change of the output, and, when both have one\n"
                   "skeleton, units and up axis (a transfer onto the source itself), the mean distance between their\n"
@@ -80,7 +81,7 @@ int run_eval_transfer(int argc, char** argv) {
   json results = json::array();
   std::string table =
       "| source | output | speed src / out (sizes/s) | ratio | heading change src / out (deg) | direction src / out (deg) "
-      "| feet src / out | touchdowns/s src / out | foot skate src / out (sizes/s) | floor difference (sizes) | bone change "
+      "| feet src / out | touchdowns/s src / out (per foot) | foot skate src / out (sizes/s) | floor difference (sizes) | bone change "
       "| joint distance |\n"
       "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < files.size(); i += 2) {
@@ -98,11 +99,12 @@ int run_eval_transfer(int argc, char** argv) {
                        {"floor_difference", number(c.floor_difference)},
                        {"source_measurements", measurements_json(c.source)},
                        {"output_measurements", measurements_json(c.output)}});
-    table += fmt::format("| {} | {} | {:.3f} / {:.3f} | {} | {:.1f} / {:.1f} | {} / {} | {} / {} | {:.2f} / {:.2f} | {} / {} | {} | {:.2g} | {} |\n",
+    table += fmt::format("| {} | {} | {:.3f} / {:.3f} | {} | {:.1f} / {:.1f} | {} / {} | {} / {} | {:.2f} / {:.2f} ({:.2f} / {:.2f}) | {} / {} | {} | {:.2g} | {} |\n",
                          files[i], files[i + 1], c.source.speed, c.output.speed, cell(c.speed_ratio, "{:.2f}"),
                          c.source.heading_change, c.output.heading_change, cell(c.source.travel_direction, "{:.0f}"),
                          cell(c.output.travel_direction, "{:.0f}"), c.source.gait.feet, c.output.gait.feet,
                          c.source.gait.touchdowns_per_second, c.output.gait.touchdowns_per_second,
+                         c.source.gait.touchdowns_per_foot_second, c.output.gait.touchdowns_per_foot_second,
                          cell(c.source.gait.skate, "{:.2f}"), cell(c.output.gait.skate, "{:.2f}"),
                          cell(c.floor_difference, "{:.3f}"), c.output.bone_length_change, cell(c.joint_distance, "{:.3f}"));
   }

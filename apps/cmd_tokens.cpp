@@ -28,6 +28,7 @@ tat::DecodeCorrections corrections(const CommandLine& cli, const Clip* source) {
   out.source = source;
   out.heading = source != nullptr && !cli.is_set("--free-heading");  // only transfer declares --free-heading
   out.ground = !cli.is_set("--free-height");
+  out.steps = source != nullptr && !cli.is_set("--free-steps");  // only transfer declares --free-steps
   out.feet = !cli.is_set("--free-feet");
   return out;
 }
@@ -43,6 +44,13 @@ std::string decode_summary(const tat::DecodeReport& report) {
     out += fmt::format("; {} onto the floor ({:.3f} body sizes on average, {:.3f} at most)",
                        report.ground->mean_shift > 0.0 ? "moved" : "kept", report.ground->mean_shift,
                        report.ground->max_shift);
+  }
+  if (report.steps && report.steps->feet > 0) {
+    const StepReport& steps = *report.steps;
+    out += fmt::format("; {} gliding feet stepped, {} plants, at {:.2f} strides/s (the source's {:.2f}; largest "
+                       "miss {:.3f} sizes)",
+                       steps.feet, steps.plants, steps.strides_per_second, steps.source_strides_per_second,
+                       steps.max_miss);
   }
   const FootLockReport& feet = report.feet;
   if (feet.feet > 0) {
@@ -115,6 +123,8 @@ int run_transfer(int argc, char** argv) {
   cli.option("--tokens", "FILE", "", "also write the intermediate tokens here");
   cli.flag("--free-heading", "keep heading and path as decoded (default: turn the output's body and path slowly\n"
                              "to face and go where the source does over time, as the decoded turning drifts)");
+  cli.flag("--free-steps", "leave gliding feet as decoded (default: where the output's feet glide along with its body\n"
+                           "while the source's step, put them down in the source's rhythm and bend the legs to reach)");
   declare_correction_options(cli);
   declare_model_options(cli);
   cli.example("nec transfer human_wave.bvh --to dragon.bvh --model runs/tat -o dragon_wave.bvh");

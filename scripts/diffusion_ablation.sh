@@ -6,7 +6,8 @@
 # Variants: owo (the default: OwO joint identity, rig augmentation), tree (TreePE + RestPE instead of OwO),
 # no-augment (rig augmentation off); all three by default. CLIPS: at most this many test clips per dataset
 # (default 60). Writes OUT_DIR/<variant>/{pose,motion} and OUT_DIR/<variant>/eval/t2m.md; about 40 minutes
-# per variant on 2 cores (training 28, generation and evaluation 11).
+# per variant on 2 cores (training 28, generation and evaluation 11). NEC_THREADS (default 2): threads of
+# every training and generation (1 lets two jobs share a 2-core machine without their threads spinning).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 6 ]; then
@@ -18,6 +19,7 @@ shift $(( $# < 7 ? $# : 7 ))
 variants=("$@")
 [ ${#variants[@]} -gt 0 ] || variants=(owo tree no-augment)
 nec=${NEC:-build/apps/nec}
+threads=${NEC_THREADS:-2}
 for variant in "${variants[@]}"; do
   dir="$out/$variant"
   mkdir -p "$dir"
@@ -40,9 +42,9 @@ json.dump(motion, open(f"{dir}/motion.json", "w"), indent=1)
 PY
   echo "== $variant: training"
   "$nec" train diffusion --stage pose --config "$dir/pose.json" --data "$cache" --owo "$owo" --pieces "$pieces" \
-    --out "$dir/pose" --threads 2 --force > "$dir/pose.log"
+    --out "$dir/pose" --threads "$threads" --force > "$dir/pose.log"
   "$nec" train diffusion --stage motion --config "$dir/motion.json" --data "$cache" --pose "$dir/pose" \
-    --out "$dir/motion" --threads 2 --force > "$dir/motion.log"
+    --out "$dir/motion" --threads "$threads" --force > "$dir/motion.log"
   tail -n 2 "$dir/pose.log" "$dir/motion.log"
   echo "== $variant: generation and evaluation"
   scripts/eval_generation.sh "$dir/motion" "$eval_cache" "$evaluator" "$dir/eval" test 1 "$clips"

@@ -6,6 +6,7 @@
 #   scripts/eval_generation.sh MODEL CACHE EVALUATOR OUT_DIR [SPLIT] [SAMPLES] [CLIPS]     # MODEL: a GPT or diffusion checkpoint
 # SPLIT: test (default) or val; SAMPLES per caption (default 1; 2 or more also give Multimodality);
 # CLIPS: at most this many clips of each dataset, evenly spaced in the manifest's order (default: all).
+# NEC_THREADS: threads of each `nec generate` (default 2).
 # Writes OUT_DIR/generated/<dataset>/<the source's folder>/*.bvh (+ caption sidecars; the zoo's folders
 # cNNN_<plan> give `nec eval t2m` the body plan), OUT_DIR/t2m.md and OUT_DIR/t2m.json.
 set -euo pipefail
@@ -16,6 +17,7 @@ if [ $# -lt 4 ]; then
 fi
 model=$1 cache=$2 evaluator=$3 out=$4 split=${5:-test} samples=${6:-1} clips=${7:-0}
 nec=${NEC:-build/apps/nec}
+threads=${NEC_THREADS:-2}
 mkdir -p "$out/generated"
 started=$SECONDS
 # One line per clip: dataset, source file, seconds, first caption (tab-separated).
@@ -39,7 +41,7 @@ while IFS=$'\t' read -r dataset source seconds caption; do
   folder="$out/generated/$dataset/$(basename "$(dirname "$source")")"
   mkdir -p "$folder"
   "$nec" generate "$caption" --skeleton "$source" --model "$model" --seconds "$seconds" --samples "$samples" \
-    --seed "$count" -o "$folder/$(printf %04d "$count").bvh" --force --threads 2 > /dev/null
+    --seed "$count" -o "$folder/$(printf %04d "$count").bvh" --force --threads "$threads" > /dev/null
 done < "$out/clips.tsv"
 echo "generated $count clips of the $split split in $((SECONDS - started)) s"
 "$nec" eval t2m --generated "$out/generated" --reference "$cache" --evaluator "$evaluator" --split "$split" \

@@ -190,15 +190,16 @@ TEST_F(CliTat, EncodeDecodeOntoAnotherSkeletonKeepsItsNamesAndChannels) {
     EXPECT_EQ(run.exit_code, 0) << run.output;
     return out_path;
   };
-  // transfer = encode + decode, and then turned to face as the source does and put on the floor where it stands
-  // (decode, without a source, settles the body onto the floor instead).
+  // transfer = encode + decode, and then turned to face as the source does, put on the floor where it stands and
+  // its gliding feet stepped in the source's rhythm (decode, without a source, settles the body onto the floor
+  // instead).
   const std::string decoded_height = path("decoded_height.bvh");
   ASSERT_EQ(run_nec("decode " + tokens + " --skeleton " + target + " --model " + shared("tat") + " -o " + decoded_height +
                     " --threads 1 --free-height").exit_code, 0);
-  EXPECT_EQ(read_file(transfer("as_decoded.bvh", " --free-heading --free-height")), read_file(decoded_height));
+  EXPECT_EQ(read_file(transfer("as_decoded.bvh", " --free-heading --free-height --free-steps")), read_file(decoded_height));
   const Clip followed = read_bvh(transfer("followed.bvh", ""));
-  const Clip followed_free_feet = read_bvh(transfer("followed_free_feet.bvh", " --free-feet"));
-  const Clip free = read_bvh(transfer("free.bvh", " --free-feet --free-heading"));
+  const Clip followed_free_feet = read_bvh(transfer("followed_free_feet.bvh", " --free-feet --free-steps"));
+  const Clip free = read_bvh(transfer("free.bvh", " --free-feet --free-steps --free-heading"));
   ASSERT_EQ(followed.motion.frame_count, decoded.motion.frame_count);
   ASSERT_EQ(free.motion.frame_count, decoded.motion.frame_count);
   // Facing is followed by turning the root (and its path) only.
@@ -221,7 +222,8 @@ TEST_F(CliTat, EncodeDecodeOntoAnotherSkeletonKeepsItsNamesAndChannels) {
   EXPECT_LT(followed_error, 5.0);
   EXPECT_LT(followed_error, 0.4 * free_error);
 
-  // Feet are pinned by turning leg joints only: with --free-feet the root moves and turns the same.
+  // Feet are stepped and pinned by turning leg joints only: with --free-feet --free-steps the root moves and
+  // turns the same.
   for (int t = 0; t < followed.motion.frame_count; ++t) {
     EXPECT_LT((followed.motion.translation(t, 0) - followed_free_feet.motion.translation(t, 0)).norm(), 1e-9) << t;
     EXPECT_LT(followed.motion.rotation(t, 0).angularDistance(followed_free_feet.motion.rotation(t, 0)), 1e-9) << t;

@@ -4,6 +4,8 @@
 #include "nec/motion/kinematics.h"
 #include "nec/motion/statistics.h"
 
+#include "leg_reach.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -13,42 +15,12 @@
 namespace nec {
 namespace {
 
-constexpr int kMaxLegJoints = 4;
-
-// A foot and the two joints that move it: the hip swings, the knee bends (-1: a one-joint leg only swings).
-struct Leg {
-  int foot = -1;
-  int hip = -1;
-  int knee = -1;
-};
-
-// The leg above `foot`: its parent and up to the first joint of the limb, at most kMaxLegJoints, never the
-// root. An empty leg (hip -1) when the foot hangs from the root.
-Leg leg_above(const Skeleton& skeleton, const std::vector<std::vector<int>>& children, int foot) {
-  std::vector<int> chain;  // from the foot's parent upwards
-  for (int j = skeleton.parents[foot]; j > 0 && static_cast<int>(chain.size()) < kMaxLegJoints;
-       j = skeleton.parents[j]) {
-    chain.push_back(j);
-    if (children[skeleton.parents[j]].size() > 1) break;
-  }
-  Leg leg;
-  leg.foot = foot;
-  if (chain.empty()) return leg;
-  leg.hip = chain.back();
-  if (chain.size() > 1) leg.knee = chain[(chain.size() - 1) / 2];
-  return leg;
-}
+using detail::Leg;
+using detail::Positions;
 
 struct Plant {
   int begin = 0, end = 0;  // frames [begin, end)
   Vec3 pin = Vec3::Zero();
-};
-
-// Joint positions of every frame, (T, J).
-struct Positions {
-  std::vector<Vec3> data;
-  int joints = 0;
-  const Vec3& at(int t, int j) const { return data[static_cast<size_t>(t) * joints + j]; }
 };
 
 // Plants of one foot: runs of at least min_plant_frames frames within the contact height of `ground` and
@@ -96,37 +68,6 @@ double pin_weight(const Plant& plant, int t, int blend_frames) {
   return std::max(0.0, 1.0 - static_cast<double>(away) / (blend_frames + 1));
 }
 
-// Sets joint j's local rotation so that its global rotation becomes `global`.
-void set_global_rotation(const Skeleton& skeleton, const Pose& pose, Motion& motion, int t, int j,
-                         const Quat& global) {
-  const Quat parent = pose.rotation(t, skeleton.parents[j]);
-  motion.rotation(t, j) = (parent.conjugate() * global).normalized();
-}
-
-// Two-bone IK at frame t: bend the knee so that hip-to-foot is as long as hip-to-target (within reach), then
-// swing the hip to put the foot on the target. `pose` must be the motion's FK; it is stale afterwards.
-void reach(const Skeleton& skeleton, const Pose& pose, Motion& motion, int t, const Leg& leg, const Vec3& target) {
-  const Vec3 hip = pose.position(t, leg.hip);
-  Vec3 foot = pose.position(t, leg.foot);
-  if (leg.knee >= 0) {
-    const Vec3 knee = pose.position(t, leg.knee);
-    const double a = (hip - knee).norm(), b = (foot - knee).norm();
-    const Vec3 n = (hip - knee).cross(foot - knee);
-    if (a > 1e-9 && b > 1e-9 && n.norm() > 1e-9 * a * b) {
-      const double d = std::clamp((target - hip).norm(), std::abs(a - b), a + b);
-      const double bend = std::acos(std::clamp((hip - knee).dot(foot - knee) / (a * b), -1.0, 1.0));
-      const double wanted = std::acos(std::clamp((a * a + b * b - d * d) / (2.0 * a * b), -1.0, 1.0));
-      const Quat knee_turn(Eigen::AngleAxisd(wanted - bend, n.normalized()));
-      set_global_rotation(skeleton, pose, motion, t, leg.knee, knee_turn * pose.rotation(t, leg.knee));
-      foot = knee + knee_turn * (foot - knee);
-    }
-  }
-  const Quat swing = Quat::FromTwoVectors(foot - hip, target - hip);
-  // The hip's parent is above the leg and keeps its rotation; the knee's local rotation, set above, turns
-  // with the hip.
-  set_global_rotation(skeleton, pose, motion, t, leg.hip, swing * pose.rotation(t, leg.hip));
-}
-
 }  // namespace
 
 void FootLockOptions::validate() const {
@@ -170,13 +111,9 @@ FootLockReport lock_feet(const Skeleton& skeleton, Motion& motion, const FootLoc
   double slide_sum = 0.0;
   long slide_frames = 0;
   for (const int leaf : skeleton.leaves()) {
-    const Leg leg = leg_above(skeleton, children, leaf);
+    const Leg leg = detail::leg_above(skeleton, children, leaf);
     if (leg.hip < 0 || hip_taken[leg.hip]) continue;
-    // Its own ground: decoded feet do not all come down to the same height.
-    std::vector<double> heights(frames);
-    for (int t = 0; t < frames; ++t) heights[t] = positions.at(t, leaf).y();
-    std::nth_element(heights.begin(), heights.begin() + frames / 10, heights.end());
-    const double ground = heights[frames / 10];
+    const double ground = detail::foot_ground(positions, frames, leaf);
     if ((ground - floor) / size > options.foot_height) continue;
     std::vector<Plant> found =
         plants_of(positions, frames, leaf, ground, size, motion.fps, contact_speed, options, slide_sum, slide_frames);
@@ -192,7 +129,7 @@ FootLockReport lock_feet(const Skeleton& skeleton, Motion& motion, const FootLoc
 
   // Per frame and foot, its strongest plant: the pin over the plant; around it, the shift that the pin made
   // at the plant's nearer end, fading.
-  std::vector<std::vector<std::pair<double, Vec3>>> targets(legs.size(), std::vector<std::pair<double, Vec3>>(frames));
+  detail::LegTargets targets(legs.size(), std::vector<std::pair<double, Vec3>>(frames));
   for (size_t k = 0; k < legs.size(); ++k) {
     const auto was = [&](int t) -> const Vec3& { return positions.at(t, legs[k].foot); };
     for (int t = 0; t < frames; ++t) {
@@ -205,20 +142,7 @@ FootLockReport lock_feet(const Skeleton& skeleton, Motion& motion, const FootLoc
       }
     }
   }
-  for (size_t k = 0; k < legs.size(); ++k) {
-    const Pose pose = forward_kinematics(skeleton, motion);
-    for (int t = 0; t < frames; ++t) {
-      if (targets[k][t].first > 0.0) reach(skeleton, pose, motion, t, legs[k], targets[k][t].second);
-    }
-  }
-  joint_positions(skeleton, motion, positions.data);
-  for (size_t k = 0; k < legs.size(); ++k) {
-    for (int t = 0; t < frames; ++t) {
-      if (targets[k][t].first < 1.0) continue;
-      const double miss = (positions.at(t, legs[k].foot) - targets[k][t].second).norm();
-      report.max_miss = std::max(report.max_miss, miss / size);
-    }
-  }
+  report.max_miss = detail::reach_targets(skeleton, motion, legs, targets, positions, size);
   return report;
 }
 

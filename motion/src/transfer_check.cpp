@@ -15,7 +15,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-
 // Angle a - b wrapped into (-180, 180].
 double wrapped_difference(double a, double b) {
   double d = std::fmod(a - b, 360.0);
@@ -23,6 +22,29 @@ double wrapped_difference(double a, double b) {
   if (d > 180.0) d -= 360.0;
   return d;
 }
+
+}  // namespace
+
+std::vector<bool> contact_frames(const std::vector<Vec3>& positions, int joints, int leaf, double floor, double size,
+                                 double fps) {
+  const int frames = static_cast<int>(positions.size()) / joints;
+  std::vector<bool> contact(frames);
+  for (int t = 0; t < frames; ++t) {
+    const bool low = (positions[static_cast<size_t>(t) * joints + leaf].y() - floor) / size < kContactHeight;
+    contact[t] = low && horizontal_speed(positions, joints, leaf, t, fps) / size < kContactSpeed;
+  }
+  return contact;
+}
+
+std::vector<int> touchdown_frames(const std::vector<bool>& contact) {
+  std::vector<int> out;
+  for (int t = 1; t + 1 < static_cast<int>(contact.size()); ++t) {
+    if (contact[t] && contact[t + 1] && !contact[t - 1]) out.push_back(t);
+  }
+  return out;
+}
+
+namespace {
 
 GaitMeasurements measure_gait(const Clip& clip, double size) {
   const Motion& m = clip.motion;
@@ -39,24 +61,21 @@ GaitMeasurements measure_gait(const Clip& clip, double size) {
   long planted = 0, touchdowns = 0, low_frames = 0;
   double low_speed_sum = 0.0;
   for (const int leaf : clip.skeleton.leaves()) {
-    std::vector<bool> contact(frames);
     for (int t = 0; t < frames; ++t) {
-      const double speed = horizontal_speed(positions, joints, leaf, t, m.fps) / size;
-      const bool low = (at(t, leaf).y() - floor) / size < kContactHeight;
-      contact[t] = low && speed < kContactSpeed;
-      if (low) low_speed_sum += speed, ++low_frames;
+      if ((at(t, leaf).y() - floor) / size >= kContactHeight) continue;
+      low_speed_sum += horizontal_speed(positions, joints, leaf, t, m.fps) / size;
+      ++low_frames;
     }
+    const std::vector<bool> contact = contact_frames(positions, joints, leaf, floor, size, m.fps);
     const long frames_planted = std::count(contact.begin(), contact.end(), true);
     if (frames_planted == 0) continue;
     ++gait.feet;
     planted += frames_planted;
-    // A foot already down at the first frame has not touched down.
-    for (int t = 1; t + 1 < frames; ++t) {
-      if (contact[t] && contact[t + 1] && !contact[t - 1]) ++touchdowns;
-    }
+    touchdowns += static_cast<long>(touchdown_frames(contact).size());
   }
   if (gait.feet > 0) gait.contact_fraction = static_cast<double>(planted) / (static_cast<double>(gait.feet) * frames);
   gait.touchdowns_per_second = touchdowns / m.duration_seconds();
+  if (gait.feet > 0) gait.touchdowns_per_foot_second = gait.touchdowns_per_second / gait.feet;
   if (low_frames > 0) gait.skate = low_speed_sum / static_cast<double>(low_frames);
   return gait;
 }

@@ -132,6 +132,7 @@ DecodeReport write_onto(const PreparedClip& target, const Features& features, co
     report.ground = source != nullptr ? follow_ground(*source, out.skeleton, out.motion)
                                       : settle_on_ground(out.skeleton, out.motion);
   }
+  if (source != nullptr && corrections.steps) report.steps = step_after(*source, out.skeleton, out.motion);
   if (corrections.feet) report.feet = lock_feet(out.skeleton, out.motion);
   out = denormalize(out, with_heading(target.normalization, heading_degrees));
   write_clip(out_path, out, target_path, animation);

@@ -22,6 +22,9 @@ struct GaitMeasurements {
   int feet = 0;                       // leaf joints that spend time near the ground
   double contact_fraction = 0.0;      // share of (frame, foot) pairs with the foot planted
   double touchdowns_per_second = 0.0; // foot plants (of all feet together) per second
+  // touchdowns_per_second / feet: the steps a foot takes per second (its cadence), which a transfer onto more
+  // or fewer legs can keep where the total cannot.
+  double touchdowns_per_foot_second = 0.0;
   // Foot skate: mean horizontal speed (body sizes/s) of leaf joints over the frames they spend below
   // kContactHeight, however fast they move there; NaN if none comes down that low.
   double skate = 0.0;
@@ -50,6 +53,14 @@ inline constexpr double kMinTravel = 0.1;
 // sizes per second; a plant must last two frames to count.
 inline constexpr double kContactHeight = 0.04;
 inline constexpr double kContactSpeed = 0.3;
+
+// The contact rule per frame for one leaf joint, from positions (T, J) as joint_positions writes them; `floor`
+// is the clip's lowest joint height, `size` its body size.
+std::vector<bool> contact_frames(const std::vector<Vec3>& positions, int joints, int leaf, double floor, double size,
+                                 double fps);
+// Frames where a plant starts: in contact there and in the next frame, not in the frame before (a foot already
+// down at the first frame has not touched down).
+std::vector<int> touchdown_frames(const std::vector<bool>& contact);
 
 // Window length of MotionMeasurements::lowest_heights, and how far (body sizes) a transfer's lowest joint may
 // sit from where its source's does, window by window, to stand on the floor as the source does (about 5 cm

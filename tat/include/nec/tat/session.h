@@ -12,6 +12,7 @@
 #include "nec/motion/follow_heading.h"
 #include "nec/motion/foot_lock.h"
 #include "nec/motion/preprocess.h"
+#include "nec/motion/step_feet.h"
 #include "nec/tat/checkpoint.h"
 #include "nec/tat/inference.h"
 #include "nec/tat/tokens.h"
@@ -58,6 +59,7 @@ struct DecodeCorrections {
   const Clip* source = nullptr;  // the clip the tokens came from, prepared for the model (a transfer), or none
   bool heading = true;           // with a source: turn body and path to face and go where it does
   bool ground = true;            // stand on the floor where the source stands (follow_ground), else settle onto it
+  bool steps = true;             // with a source: feet that glide step in the source's rhythm (step_after)
   bool feet = true;              // pin the feet the motion puts down (lock_feet)
 };
 
@@ -65,6 +67,7 @@ struct DecodeCorrections {
 struct DecodeReport {
   std::optional<HeadingReport> heading;  // steered to follow a source's facing and path
   std::optional<GroundReport> ground;    // lifted or lowered onto the floor
+  std::optional<StepReport> steps;       // gliding feet put down in the source's rhythm
   FootLockReport feet;
 };
 
