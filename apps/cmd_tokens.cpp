@@ -115,7 +115,8 @@ int run_transfer(int argc, char** argv) {
   CommandLine cli("nec transfer",
                   "Move a clip onto another skeleton (any species): encode SRC to tokens with its own skeleton,\n"
                   "decode them with the target's. The output uses the target file's joint names, channels, Euler\n"
-                  "orders, units and up axis; speed scales with the target's size; it faces and goes where the source does.");
+                  "orders, units and up axis; speed scales with the target's size; it faces and goes where the source does\n"
+                  "and steps in its rhythm.");
   cli.positional("SRC", "the motion to transfer: BVH file or rigged asset (SRC#NAME: one animation of an asset)");
   cli.option("--to", "TARGET", "", "BVH file or rigged asset whose skeleton receives the motion", true);
   cli.option("-o", "OUT", "", "output: .bvh, or .glb (a copy of the target asset with the motion added)", true);
