@@ -205,6 +205,15 @@ TEST(Segment, RightTurnHasTheOppositeSign) {
   EXPECT_NEAR(turn.measurements.turn_rate, -60.0, 10.0);
 }
 
+TEST(Segment, HeadingAloneIsTheHeadingOfTheFullMeasurement) {
+  const Clip take = stand_walk_turn_lie(60.0, -60.0);
+  const std::vector<double> heading = measure_heading(take);
+  EXPECT_EQ(heading, measure_kinematics(take).heading);
+  ASSERT_EQ(heading.size(), static_cast<size_t>(take.motion.frame_count));
+  EXPECT_NEAR(heading[9 * 60] - heading[6 * 60], -180.0, 20.0);  // 3 s turning right at 60 degrees/s
+  EXPECT_TRUE(measure_heading(Clip{take.skeleton, Motion::rest(take.skeleton, 0, 60.0), {}}).empty());
+}
+
 TEST(Segment, WalkingAlongACurveTurnsTheRightWay) {
   // Walk 5 s at 0.8 body sizes/s while the heading changes by `rate` degrees/s;
   // the path is integrated from the heading so the creature walks where it faces.

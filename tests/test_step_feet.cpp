@@ -53,8 +53,7 @@ std::vector<Foot> feet_of(const Clip& clip) {
   std::vector<Vec3> positions;
   joint_positions(clip.skeleton, clip.motion, positions);
   const int frames = clip.motion.frame_count, joints = clip.motion.joint_count;
-  double floor = std::numeric_limits<double>::infinity();
-  for (const Vec3& p : positions) floor = std::min(floor, p.y());
+  const double floor = lowest_height(positions);
   std::vector<Foot> out;
   for (const int leaf : clip.skeleton.leaves()) {
     Foot foot;

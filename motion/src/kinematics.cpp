@@ -2,6 +2,7 @@
 #include "nec/motion/kinematics.h"
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 namespace nec {
@@ -74,6 +75,12 @@ std::vector<double> lowest_joint_heights(const std::vector<Vec3>& positions, int
     lowest[t] = positions[t * joints].y();
     for (int j = 1; j < joints; ++j) lowest[t] = std::min(lowest[t], positions[t * joints + j].y());
   }
+  return lowest;
+}
+
+double lowest_height(const std::vector<Vec3>& positions) {
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const Vec3& p : positions) lowest = std::min(lowest, p.y());
   return lowest;
 }
 

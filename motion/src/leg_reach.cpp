@@ -65,6 +65,8 @@ void reach(const Skeleton& skeleton, const Pose& pose, Motion& motion, int t, co
 double reach_targets(const Skeleton& skeleton, Motion& motion, const std::vector<Leg>& legs, const LegTargets& targets,
                      Positions& positions, double size) {
   for (size_t k = 0; k < legs.size(); ++k) {
+    const bool has_target = std::any_of(targets[k].begin(), targets[k].end(), [](const auto& w) { return w.first > 0.0; });
+    if (!has_target) continue;  // forward kinematics only for the legs that move
     const Pose pose = forward_kinematics(skeleton, motion);
     for (int t = 0; t < motion.frame_count; ++t) {
       if (targets[k][t].first > 0.0) reach(skeleton, pose, motion, t, legs[k], targets[k][t].second);

@@ -716,6 +716,13 @@ void SegmentOptions::validate() const {
   require(min_phase_seconds > 0.0 && min_jump_seconds > 0.0, "minimum phase lengths must be positive");
 }
 
+std::vector<double> measure_heading(const Clip& take) {
+  if (take.motion.frame_count == 0) return {};
+  std::string source;
+  return unwrapped_heading(facing_directions(forward_kinematics(take.skeleton, take.motion),
+                                             find_body_layout(take.skeleton), source));
+}
+
 KinematicSignals measure_kinematics(const Clip& take, const SegmentOptions& options) {
   options.validate();
   const Skeleton& skeleton = take.skeleton;

@@ -85,8 +85,7 @@ Rhythm rhythm_of(const Clip& source, const StepOptions& options) {
   Rhythm rhythm;
   Positions positions{{}, joints};
   joint_positions(source.skeleton, m, positions.data);
-  double floor = std::numeric_limits<double>::infinity();
-  for (const Vec3& p : positions.data) floor = std::min(floor, p.y());
+  const double floor = lowest_height(positions.data);
 
   std::vector<int> feet;
   std::vector<std::vector<int>> touchdowns;
@@ -105,7 +104,7 @@ Rhythm rhythm_of(const Clip& source, const StepOptions& options) {
   }
   if (feet.empty()) return rhythm;
 
-  const std::vector<double> heading = measure_kinematics(source).heading;
+  const std::vector<double> heading = measure_heading(source);
   std::vector<Placement> placements;
   for (const int foot : feet) placements.push_back(placement_of(positions, heading, foot, 0, frames));
   const std::vector<double> offsets = phase_offsets(placements, options.midline);
@@ -197,8 +196,7 @@ StepReport step_after(const Clip& source, const Skeleton& skeleton, Motion& moti
 
   Positions positions{{}, joints};
   joint_positions(skeleton, motion, positions.data);
-  double floor = std::numeric_limits<double>::infinity();
-  for (const Vec3& p : positions.data) floor = std::min(floor, p.y());
+  const double floor = lowest_height(positions.data);
   const double standing = median(lowest_joint_heights(positions.data, joints));
 
   // The gliding feet, one per leg (the toes of one paw would fight: the first keeps the leg).
@@ -221,7 +219,7 @@ StepReport step_after(const Clip& source, const Skeleton& skeleton, Motion& moti
     grounds.push_back(ground);
   }
   if (legs.empty()) return report;
-  const std::vector<double> heading = measure_kinematics(Clip{skeleton, motion, {}}).heading;
+  const std::vector<double> heading = measure_heading(Clip{skeleton, motion, {}});
   std::vector<Placement> placements;
   for (const Leg& leg : legs) placements.push_back(placement_of(positions, heading, leg.foot, rhythm.begin, rhythm.end));
   const std::vector<double> offsets = phase_offsets(placements, options.midline);

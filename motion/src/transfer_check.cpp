@@ -52,8 +52,7 @@ GaitMeasurements measure_gait(const Clip& clip, double size) {
   std::vector<Vec3> positions;
   joint_positions(clip.skeleton, m, positions);
   auto at = [&](int t, int j) -> const Vec3& { return positions[static_cast<size_t>(t) * joints + j]; };
-  double floor = std::numeric_limits<double>::infinity();
-  for (const Vec3& p : positions) floor = std::min(floor, p.y());
+  const double floor = lowest_height(positions);
 
   GaitMeasurements gait;
   gait.skate = kNaN;

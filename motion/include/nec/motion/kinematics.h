@@ -28,6 +28,8 @@ void joint_positions(const Skeleton& skeleton, const Motion& motion, std::vector
 double horizontal_speed(const std::vector<Vec3>& positions, int joints, int joint, int frame, double fps);
 // Height (y) of the lowest joint in each frame, from positions (T, J) as joint_positions writes them.
 std::vector<double> lowest_joint_heights(const std::vector<Vec3>& positions, int joints);
+// The lowest height (y) any joint reaches in any frame: the clip's floor; +infinity for no positions.
+double lowest_height(const std::vector<Vec3>& positions);
 // Global positions of the end sites, (T, E) in skeleton.end_sites order.
 std::vector<Vec3> end_site_positions(const Skeleton& skeleton, const Pose& pose);
 

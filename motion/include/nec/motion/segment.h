@@ -109,6 +109,8 @@ struct KinematicSignals {
 
 // Throws std::invalid_argument for invalid options or a take whose fps is not positive.
 KinematicSignals measure_kinematics(const Clip& take, const SegmentOptions& options = {});
+// measure_kinematics(take).heading alone (forward kinematics and the facing estimate, nothing else).
+std::vector<double> measure_heading(const Clip& take);
 
 // Frames [begin, end) of one activity.
 struct Phase {
