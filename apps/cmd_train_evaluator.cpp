@@ -87,6 +87,10 @@ int run_train_evaluator(int argc, char** argv) {
                trainer.parameter_count(), cli.value("--data"), trainer.train_clip_count(), start_step + 1, config.steps,
                config.batch_size, config.data.window_frames, run.device.str(), run.ranks ? run.ranks->world_size() : 1,
                torch::get_num_threads());
+    if (config.captions.synonym_probability > 0) {
+      fmt::print("caption synonyms: {} of the train captions' words have {} synonyms among the word vectors\n",
+                 trainer.synonyms().word_count(), trainer.synonyms().synonym_count());
+    }
     if (!trainer.has_validation()) {
       fmt::print("fewer than {} captioned val clips: no validation, no best model\n", evaluator::kMinValidationClips);
     }

@@ -404,6 +404,31 @@ TEST_F(EvaluatorTest, ACaptionLongerThanTheTextEncoderTakesIsRefusedBeforeTraini
   }
 }
 
+TEST_F(EvaluatorTest, CaptionSynonymsComeFromTheTrainCaptionsWordsAndTrainingRunsOnThem) {
+  const DatasetCache cache = action_cache(false);
+  EvaluatorTrainConfig config = small_config();
+  config.captions.synonym_probability = 1.0;
+  EvaluatorTrainer trainer(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  // The corpus vectors put "hound" next to "dog" and "sprints" next to "runs"; their other words lie at
+  // random angles, of which at most one passes min_cosine 0.6 here (a seeded draw).
+  EXPECT_EQ(trainer.synonyms().synonyms_of("dog"), (std::vector<std::string>{"hound"}));
+  EXPECT_EQ(trainer.synonyms().synonyms_of("runs"), (std::vector<std::string>{"sprints"}));
+  EXPECT_EQ(trainer.synonyms().synonym_count(), trainer.synonyms().word_count());
+  EXPECT_LE(trainer.synonyms().word_count(), 3u);
+  for (int64_t step = 1; step <= 3; ++step) EXPECT_TRUE(std::isfinite(trainer.step(step)[0].second));
+
+  config.captions.synonym_probability = 0.5;
+  EXPECT_THROW(EvaluatorTrainer(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), nullptr, torch::kCPU),
+               std::invalid_argument);
+  config.captions.synonym_probability = 1.5;
+  try {
+    config.validate();
+    FAIL() << "accepted a synonym probability of 1.5";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("captions.synonym_probability"), std::string::npos) << e.what();
+  }
+}
+
 TEST(EvaluatorTrainConfig, UnknownFieldsAreNamedAndOnlyTheCadenceMayChangeOnResume) {
   const testing::TempDir dir;
   write_file_atomic(dir / "c.json", R"({"comment": "ok", "model": {"motion": {"dimm": 3}}})");

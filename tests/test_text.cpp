@@ -3,6 +3,7 @@
 // tiny hand-written vocabulary; one test uses the real imported file when present.
 #include "nec/motion/error.h"
 #include "nec/text/glove_import.h"
+#include "nec/text/synonyms.h"
 #include "nec/text/word_vectors.h"
 #include "test_support.h"
 
@@ -317,6 +318,87 @@ TEST(RealWordVectors, JointNamesThatMeanTheSameAreCloser) {
   EXPECT_GT(similarity("LeftUpLeg", "thigh.L"), similarity("LeftUpLeg", "Head"));
   EXPECT_GT(similarity("LeftHand", "RightHand"), similarity("LeftHand", "Tail"));
   EXPECT_GT(similarity("LeftForeArm", "UpperArm_L"), similarity("LeftForeArm", "Neck"));
+}
+
+// Caption words walks / runs / left / right and words no caption uses, with known cosines.
+class SynonymVectors : public ::testing::Test {
+ protected:
+  SynonymVectors() {
+    const std::map<std::string, std::vector<float>> rows{
+        {"walks", {1, 0, 0, 0}},        {"runs", {0, 1, 0, 0}},
+        {"left", {0, 0, 1, 0}},         {"right", {0, 0, 0.9f, 0.4f}},  // cosine 0.91 to "left"
+        {"strolls", {0.95f, 0.1f, 0, 0}},  // 0.995 to walks
+        {"ambles", {0.9f, 0.3f, 0, 0}},    // 0.949 to walks
+        {"sprints", {0.1f, 1, 0, 0}},      // 0.995 to runs
+        {"jogs", {0.6f, 0.7f, 0.1f, 0}},   // 0.755 to runs, 0.647 to walks: a synonym of runs only
+        {"leftward", {0, 0, 1, 0.05f}},    // closer to left than to right
+        {"far", {0, 0, 0, 0}},             // zero vector: no cosine to anything
+        {"upward", {0.1f, 0.1f, 0.1f, 1}},  // 0.43 to right: under min_cosine
+        {"Walker", {1, 0.01f, 0, 0}},      // not lower-case letters only
+        {"walks2", {1, 0.02f, 0, 0}}};
+    std::vector<std::string> words;
+    std::vector<float> flat;
+    for (const auto& [word, row] : rows) {
+      words.push_back(word);
+      flat.insert(flat.end(), row.begin(), row.end());
+    }
+    write_word_vectors(dir_ / "v.bin", words, flat, 4);
+  }
+  WordVectors vectors() const { return WordVectors::load(dir_ / "v.bin"); }
+  // "person" has no vector: ignored; "walks" twice: once.
+  const std::vector<std::string> caption_words_{"a", "person", "walks", "walks", "runs", "left", "right"};
+  testing::TempDir dir_;
+};
+
+TEST_F(SynonymVectors, SynonymsAreTheClosestNonCaptionWordsOfTheirOwnVoronoiCell) {
+  const WordVectors v = vectors();
+  const SynonymTable table = SynonymTable::build(v, caption_words_, SynonymOptions{});
+  EXPECT_EQ(table.synonyms_of("walks"), (std::vector<std::string>{"strolls", "ambles"}));
+  EXPECT_EQ(table.synonyms_of("runs"), (std::vector<std::string>{"sprints", "jogs"}));
+  // "right" is never a synonym of "left" (a caption word), and "leftward" goes to the closer of the two.
+  EXPECT_EQ(table.synonyms_of("left"), (std::vector<std::string>{"leftward"}));
+  EXPECT_TRUE(table.synonyms_of("right").empty());
+  EXPECT_TRUE(table.synonyms_of("person").empty());
+  EXPECT_EQ(table.word_count(), 3u);
+  EXPECT_EQ(table.synonym_count(), 5u);
+
+  SynonymOptions strict;
+  strict.min_cosine = 0.8;  // drops jogs (0.755)
+  strict.per_word = 1;      // keeps strolls of walks' two
+  const SynonymTable few = SynonymTable::build(v, caption_words_, strict);
+  EXPECT_EQ(few.synonyms_of("walks"), (std::vector<std::string>{"strolls"}));
+  EXPECT_EQ(few.synonyms_of("runs"), (std::vector<std::string>{"sprints"}));
+  EXPECT_TRUE(SynonymTable::build(v, {"person"}, SynonymOptions{}).synonyms_of("person").empty());
+}
+
+TEST_F(SynonymVectors, RewritesReplaceWordsWithTheGivenChanceAndRepeatWithTheSeed) {
+  const SynonymTable table = SynonymTable::build(vectors(), caption_words_, SynonymOptions{});
+  SplitMix64 never(1);
+  EXPECT_EQ(table.rewrite("a person walks to the left", 0.0, never), "a person walks to the left");
+  std::map<std::string, int> seen;
+  SplitMix64 always(2);
+  for (int i = 0; i < 200; ++i) ++seen[table.rewrite("a person walks to the left", 1.0, always)];
+  EXPECT_EQ(seen.size(), 2u);  // both synonyms of walks, left always "leftward"
+  EXPECT_GT(seen["a person strolls to the leftward"], 60);
+  EXPECT_GT(seen["a person ambles to the leftward"], 60);
+
+  SplitMix64 half(3), same(3);
+  int replaced = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const std::string out = table.rewrite("walks", 0.5, half);
+    EXPECT_EQ(out, table.rewrite("walks", 0.5, same));
+    replaced += out != "walks";
+  }
+  EXPECT_NEAR(replaced / 2000.0, 0.5, 0.05);
+}
+
+TEST_F(SynonymVectors, BadOptionsAreRefused) {
+  SynonymOptions options;
+  options.per_word = 0;
+  EXPECT_THROW(SynonymTable::build(vectors(), caption_words_, options), std::invalid_argument);
+  options = SynonymOptions{};
+  options.min_cosine = 1.0;
+  EXPECT_THROW(options.validate(), std::invalid_argument);
 }
 
 }  // namespace

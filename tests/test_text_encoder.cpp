@@ -79,6 +79,24 @@ TEST_F(TextEncoderTest, EveryPieceCarriesTheVectorOfItsWord) {
   }
 }
 
+TEST_F(TextEncoderTest, SplitWordsWithAVectorAreReadAsUnknownPiecesWhenAsked) {
+  const std::string caption = "a hound zebra walks";  // hound: pieces + vector; zebra: pieces, no vector
+  const text::CaptionPieces split = pieces_.split(caption);
+  const TextBatch as_cut = text::make_text_batch({caption}, pieces_, &vectors_, config_, "query");
+  config_.read_split_words_by_vector = true;
+  const TextBatch by_vector = text::make_text_batch({caption}, pieces_, &vectors_, config_, "query");
+  int unknown = 0;
+  for (size_t p = 0; p < split.ids.size(); ++p) {
+    const std::string& word = split.words[static_cast<size_t>(split.word_of_piece[p])];
+    const int64_t expected = word == "hound" ? text::kUnknownPiece : split.ids[p];
+    EXPECT_EQ(as_cut.ids[0][static_cast<int64_t>(p)].item<int64_t>(), split.ids[p]) << p;
+    EXPECT_EQ(by_vector.ids[0][static_cast<int64_t>(p)].item<int64_t>(), expected) << "piece " << p << " of " << word;
+    unknown += expected == text::kUnknownPiece;
+  }
+  EXPECT_GE(unknown, 2);  // "hound" is cut into several pieces by the corpus piece model
+  EXPECT_TRUE(torch::equal(as_cut.word_vectors, by_vector.word_vectors));
+}
+
 TEST_F(TextEncoderTest, WholeWordPiecesStartAtTheirWordVectors) {
   TextEncoder encoder(config_);
   const int64_t initialised = encoder->init_piece_embeddings(pieces_, vectors_);

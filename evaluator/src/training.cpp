@@ -26,6 +26,9 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+// Keeps the synonym draws apart from the step's other draws.
+constexpr uint64_t kSynonymStream = 0x53594e4f4e594d53ULL;  // "SYNONYMS"
+
 void require(bool ok, const std::string& message) {
   if (!ok) throw std::invalid_argument("EvaluatorTrainConfig: " + message);
 }
@@ -44,16 +47,30 @@ void EvaluatorTrainConfig::validate() const {
   } catch (const std::invalid_argument& e) {
     require(false, e.what());
   }
+  require(captions.synonym_probability >= 0 && captions.synonym_probability <= 1,
+          "captions.synonym_probability must be in [0, 1]");
+  try {
+    captions.synonyms.validate();
+  } catch (const std::invalid_argument& e) {
+    require(false, std::string("captions.synonyms.") + e.what());
+  }
   require(steps >= 1 && batch_size >= 2, "steps must be >= 1 and batch_size >= 2");
   require(data.window_frames <= model.motion.max_frames(),
           "data.window_frames must be at most model.motion.max_frames() = " + std::to_string(model.motion.max_frames()));
   require(train::valid_cadence(log_every, validate_every, checkpoint_every), train::kCadenceRule);
 }
 
+void visit_fields(train::ConfigVisitor& v, CaptionAugmentConfig& c) {
+  v.field("synonym_probability", c.synonym_probability,
+          "chance that a train caption word is replaced by one of its word-vector synonyms; 0 = off");
+  v.object("synonyms", c.synonyms, "which word-vector neighbours count as synonyms");
+}
+
 void visit_fields(train::ConfigVisitor& v, EvaluatorTrainConfig& c) {
   v.object("model", c.model, "the motion and text encoders");
   v.object("optimizer", c.optimizer, "AdamW, warm-up then cosine decay");
   v.object("data", c.data, "how batches are cut from the cache");
+  v.object("captions", c.captions, "caption augmentation: synonyms from the word vectors");
   v.field("batch_size", c.batch_size, "(clip, caption) pairs per step over all processes");
   train::visit_cadence_fields(v, c.steps, c.log_every, c.validate_every, c.checkpoint_every);
   v.field("seed", c.seed, "initial weights, batches and every step's random draws");
@@ -120,6 +137,19 @@ EvaluatorTrainer::EvaluatorTrainer(const EvaluatorTrainConfig& config, const Dat
   }
   train_ = std::make_unique<BatchLoader>(cache, train_clips,
                                          train::training_batches(config_.data, config_.batch_size, config_.seed, ranks_));
+  if (config_.captions.synonym_probability > 0) {
+    if (vectors_ == nullptr) {
+      throw std::invalid_argument("captions.synonym_probability " + std::to_string(config_.captions.synonym_probability) +
+                                  " needs word vectors");
+    }
+    std::vector<std::string> words;
+    for (const int clip : train_clips) {
+      for (const std::string& caption : cache.clips[static_cast<size_t>(clip)].captions) {
+        for (std::string& word : text::caption_words(text::normalize_caption(caption))) words.push_back(std::move(word));
+      }
+    }
+    synonyms_ = text::SynonymTable::build(*vectors_, words, config_.captions.synonyms);
+  }
   validation_clips_ = captioned_clips(cache, Split::Val);
   // R@3 needs batches of more than 3 clips to mean anything.
   if (validation_clips_.size() < kMinValidationClips) validation_clips_.clear();
@@ -146,7 +176,8 @@ train::LossTerms EvaluatorTrainer::step(int64_t step) {
     const tat::BatchTensors x = tat::to_tensors(batch).to(device_);
     const at::Tensor joints = tat::embed_skeletons(*owo_->encoder, batch.skeletons, batch.canonical_names, vectors_).clone();
     const text::TextBatch captions =
-        text::make_text_batch(batch.captions, pieces_, vectors_, config_.model.text, data_name_ + " captions");
+        text::make_text_batch(rewritten_captions(batch.captions, step), pieces_, vectors_, config_.model.text,
+                              data_name_ + " captions");
     // Items whose normalized captions are equal match each other: compare caption ids, not strings, B^2 times.
     std::map<std::string, int64_t> caption_ids;
     std::vector<int64_t> ids;
@@ -168,6 +199,21 @@ train::LossTerms EvaluatorTrainer::step(int64_t step) {
     loss_value = summed[0][0].item<double>();
   }
   return {{"loss", loss_value}, {"scale", model_->logit_scale().item<double>()}, {"lr", lr}};
+}
+
+std::vector<std::string> EvaluatorTrainer::rewritten_captions(const std::vector<std::string>& captions,
+                                                             int64_t step) const {
+  const double probability = config_.captions.synonym_probability;
+  if (probability == 0) return captions;
+  SplitMix64 random(mix64(config_.seed ^ mix64(static_cast<uint64_t>(step) ^ kSynonymStream)));
+  std::vector<std::string> out;
+  for (const std::string& caption : captions) {
+    std::string rewritten = synonyms_.rewrite(text::normalize_caption(caption), probability, random);
+    // A synonym cut into more pieces can make a caption longer than the encoder reads: keep the caption then.
+    const bool fits = static_cast<int64_t>(pieces_.split(rewritten).ids.size()) <= config_.model.text.max_pieces;
+    out.push_back(fits ? std::move(rewritten) : caption);
+  }
+  return out;
 }
 
 std::optional<train::LossTerms> EvaluatorTrainer::validate() {
@@ -261,3 +307,12 @@ int64_t EvaluatorTrainer::resume(const std::string& dir) {
 }
 
 }  // namespace nec::evaluator
+
+namespace nec::text {
+
+void visit_fields(train::ConfigVisitor& v, SynonymOptions& c) {
+  v.field("per_word", c.per_word, "most synonyms kept per caption word");
+  v.field("min_cosine", c.min_cosine, "least cosine between a caption word and its synonym");
+}
+
+}  // namespace nec::text

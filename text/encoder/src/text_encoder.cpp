@@ -45,6 +45,8 @@ void visit_fields(train::ConfigVisitor& v, TextEncoderConfig& c) {
   v.field("dropout", c.dropout, "transformer dropout in training");
   v.field("piece_dropout", c.piece_dropout,
           "chance a piece id is read as unknown in training, so that the word vectors are read too");
+  v.field("read_split_words_by_vector", c.read_split_words_by_vector,
+          "a word with a vector that the piece model cuts into several pieces is read from its vector alone");
 }
 
 PieceModel load_checkpoint_pieces(const std::string& path, const TextEncoderConfig& config,
@@ -110,14 +112,18 @@ TextBatch make_text_batch(const std::vector<std::string>& captions, const PieceM
   float* word_data = batch.word_vectors.data_ptr<float>();
   for (int64_t i = 0; i < b; ++i) {
     const CaptionPieces& caption = split[static_cast<size_t>(i)];
+    std::vector<int> pieces_of_word(caption.words.size(), 0);
+    for (const int w : caption.word_of_piece) ++pieces_of_word[static_cast<size_t>(w)];
     for (size_t p = 0; p < caption.ids.size(); ++p) {
       ids[i][static_cast<int64_t>(p)] = caption.ids[p];
       mask[i][static_cast<int64_t>(p)] = true;
       if (width == 0) continue;
-      const std::optional<size_t> word = vectors->index_of(caption.words[static_cast<size_t>(caption.word_of_piece[p])]);
+      const size_t w = static_cast<size_t>(caption.word_of_piece[p]);
+      const std::optional<size_t> word = vectors->index_of(caption.words[w]);
       if (!word) continue;
       std::copy_n(vectors->vector_data(*word), width, word_data + (i * longest + static_cast<int64_t>(p)) * width);
       known[i][static_cast<int64_t>(p)][0] = 1.0f;
+      if (config.read_split_words_by_vector && pieces_of_word[w] > 1) ids[i][static_cast<int64_t>(p)] = kUnknownPiece;
     }
   }
   return batch;

@@ -25,6 +25,7 @@
 #include "nec/train/clip_batches.h"
 #include "nec/train/loop.h"
 #include "nec/train/optimizer.h"
+#include "nec/text/synonyms.h"
 
 #include <nlohmann/json.hpp>
 #include <torch/optim/adamw.h>
@@ -60,10 +61,26 @@ inline train::ClipBatchConfig default_evaluator_batches() {
   return data;
 }
 
+}  // namespace nec::evaluator
+namespace nec::text {
+void visit_fields(train::ConfigVisitor& v, SynonymOptions& c);  // "per_word", "min_cosine"
+}  // namespace nec::text
+namespace nec::evaluator {
+
+// Caption augmentation (text/synonyms.h): in training, each caption word that
+// has synonyms among the word vectors is replaced by one with this chance, so
+// that the text encoder reads words no caption used ("strolls" for "walks").
+struct CaptionAugmentConfig {
+  double synonym_probability = 0.0;  // per word, e.g. 0.25; 0 = off
+  text::SynonymOptions synonyms;     // which neighbours count as synonyms
+};
+void visit_fields(train::ConfigVisitor& v, CaptionAugmentConfig& c);
+
 struct EvaluatorTrainConfig {
   EvaluatorConfig model;
   train::OptimizerConfig optimizer = default_evaluator_optimizer();  // AdamW, warm-up + cosine
   train::ClipBatchConfig data = default_evaluator_batches();  // crop, joint buckets, rig augmentation
+  CaptionAugmentConfig captions;  // synonym rewrites of the train captions
   int64_t steps = 3000;          // the step training ends at
   int64_t batch_size = 64;       // (clip, caption) pairs per step over all ranks
   int64_t log_every = 20;        // progress line cadence off a terminal; 0 = only the last step
@@ -122,11 +139,14 @@ class EvaluatorTrainer {
   int64_t parameter_count() const;
   int train_clip_count() const { return train_->clip_count(); }
   bool has_validation() const { return !validation_clips_.empty(); }
+  const text::SynonymTable& synonyms() const { return synonyms_; }
   int64_t best_step() const { return info_.best_step; }
   double best_r_precision() const { return info_.best_r_precision; }
 
  private:
   EvaluatorCheckpointInfo info(int64_t step) const;
+  // The batch's captions with synonyms drawn for `step` (config.captions); the same captions when off.
+  std::vector<std::string> rewritten_captions(const std::vector<std::string>& captions, int64_t step) const;
 
   EvaluatorTrainConfig config_;
   const DatasetCache& cache_;
@@ -142,6 +162,7 @@ class EvaluatorTrainer {
   train::LearningRateSchedule schedule_;
   std::unique_ptr<BatchLoader> train_;
   std::vector<int> validation_clips_;
+  text::SynonymTable synonyms_;  // of the train captions' words; empty when captions.synonym_probability is 0
   EvaluatorCheckpointInfo info_;  // best_step, best_r_precision
   Evaluator best_model_{nullptr};  // a copy of the model at its best validation
   bool best_pending_ = false;      // best_model_ is newer than <out>/best

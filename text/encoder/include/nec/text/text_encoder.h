@@ -16,7 +16,8 @@
 // vector sits near the words it did learn ("dog", "crawls"), and every piece
 // of the word carries it. In training, piece ids are replaced by the unknown
 // piece with probability piece_dropout so that the encoder learns to read
-// the word channel and not only the ids.
+// the word channel and not only the ids; with read_split_words_by_vector a
+// word the piece model does not know whole is read that way always.
 #pragma once
 
 #include "nec/motion/dataset.h"
@@ -57,6 +58,11 @@ struct TextEncoderConfig {
   int64_t output_dim = 128;   // width of the sentence vector
   double dropout = 0.1;       // in the transformer, training only
   double piece_dropout = 0.1; // chance a piece id is read as unknown in training (the word channel stays)
+  // A word with a vector that the piece model cuts into several pieces (a word
+  // the piece model's corpus never used: "flutters" -> "fl" "utter" "s") gets
+  // the unknown piece for each of them, so that it is read from its vector
+  // alone, as piece dropout trained, and not from pieces learnt for other words.
+  bool read_split_words_by_vector = false;
 
   // Throws std::invalid_argument naming the bad field.
   void validate() const;
