@@ -129,6 +129,27 @@ TEST(ConfigFields, ARequiredReadNamesTheMissingFieldWithItsPrefix) {
   }
 }
 
+struct Grown {
+  int64_t width = 4;
+  bool new_switch = false;  // added later: old checkpoints lack it and did what false does
+};
+
+void visit_fields(nec::train::ConfigVisitor& v, Grown& c) {
+  v.field("width", c.width, "a width");
+  v.added_field("new_switch", c.new_switch, "a switch added later");
+}
+
+TEST(ConfigFields, ACheckpointMayLackAnAddedFieldButNotAnOtherOne) {
+  const nec::train::ReadOptions checkpoint{"ckpt/config.json", "", "", true};
+  const Grown old_one = nec::train::read_config<Grown>(json::parse(R"({"width": 8})"), checkpoint);
+  EXPECT_EQ(old_one.width, 8);
+  EXPECT_FALSE(old_one.new_switch);
+  const Grown new_one = nec::train::read_config<Grown>(json::parse(R"({"width": 8, "new_switch": true})"), checkpoint);
+  EXPECT_TRUE(new_one.new_switch);
+  EXPECT_EQ(nec::train::write_config(new_one), json::parse(R"({"width": 8, "new_switch": true})"));
+  EXPECT_THROW(nec::train::read_config<Grown>(json::parse(R"({"new_switch": true})"), checkpoint), nec::InputError);
+}
+
 TEST(ConfigFields, TheFieldsThatMayChangeOnResumeAreTheMarkedOnesByDottedName) {
   EXPECT_EQ(nec::train::fields_that_may_change<Outer>(), (std::set<std::string>{"steps", "inner.rate"}));
 }

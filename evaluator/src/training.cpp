@@ -61,7 +61,7 @@ void EvaluatorTrainConfig::validate() const {
 }
 
 void visit_fields(train::ConfigVisitor& v, CaptionAugmentConfig& c) {
-  v.field("synonym_probability", c.synonym_probability,
+  v.added_field("synonym_probability", c.synonym_probability,
           "chance that a train caption word is replaced by one of its word-vector synonyms; 0 = off");
   v.object("synonyms", c.synonyms, "which word-vector neighbours count as synonyms");
 }
@@ -311,8 +311,8 @@ int64_t EvaluatorTrainer::resume(const std::string& dir) {
 namespace nec::text {
 
 void visit_fields(train::ConfigVisitor& v, SynonymOptions& c) {
-  v.field("per_word", c.per_word, "most synonyms kept per caption word");
-  v.field("min_cosine", c.min_cosine, "least cosine between a caption word and its synonym");
+  v.added_field("per_word", c.per_word, "most synonyms kept per caption word");
+  v.added_field("min_cosine", c.min_cosine, "least cosine between a caption word and its synonym");
 }
 
 }  // namespace nec::text

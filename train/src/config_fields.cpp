@@ -52,7 +52,7 @@ void JsonConfigReader::visit(const FieldInfo& info, FieldValue value) {
   const std::string name = level.prefix + info.name;
   const auto it = level.object->find(info.name);
   if (it == level.object->end()) {
-    if (options_.required) fail(name, "is missing");
+    if (options_.required && info.in_checkpoints == InCheckpoints::kRequired) fail(name, "is missing");
     return;
   }
   const json& v = *it;

@@ -45,7 +45,7 @@ void visit_fields(train::ConfigVisitor& v, TextEncoderConfig& c) {
   v.field("dropout", c.dropout, "transformer dropout in training");
   v.field("piece_dropout", c.piece_dropout,
           "chance a piece id is read as unknown in training, so that the word vectors are read too");
-  v.field("read_split_words_by_vector", c.read_split_words_by_vector,
+  v.added_field("read_split_words_by_vector", c.read_split_words_by_vector,
           "a word with a vector that the piece model cuts into several pieces is read from its vector alone");
 }
 

@@ -35,11 +35,15 @@ namespace nec::train {
 // Whether a field may differ between a checkpoint's config and the run that resumes it.
 enum class OnResume { kFixed, kMayChange };
 
+// Whether a checkpoint must hold a field, or may lack it because it was written before the field existed.
+enum class InCheckpoints { kRequired, kMayLack };
+
 struct FieldInfo {
   const char* name;                               // the JSON key, e.g. "learning_rate"
   const char* help;                               // one line for --help
   OnResume on_resume = OnResume::kFixed;
   const std::vector<std::string>* choices = nullptr;  // a string field restricted to these
+  InCheckpoints in_checkpoints = InCheckpoints::kRequired;
 };
 
 using FieldValue =
@@ -52,6 +56,13 @@ class ConfigVisitor {
   template <typename T>
   void field(const char* name, T& value, const char* help, OnResume on_resume = OnResume::kFixed) {
     visit(FieldInfo{name, help, on_resume, nullptr}, FieldValue(&value));
+  }
+
+  // A field added after checkpoints were written: one that lacks it reads the default in `value`, which
+  // must keep what those checkpoints did.
+  template <typename T>
+  void added_field(const char* name, T& value, const char* help) {
+    visit(FieldInfo{name, help, OnResume::kFixed, nullptr, InCheckpoints::kMayLack}, FieldValue(&value));
   }
 
   // An enum stored by name: `names_of(value)` gives the name of each of `options`.
@@ -84,7 +95,8 @@ struct ReadOptions {
   std::string file;     // named in every error, e.g. "configs/tat_cpu.json"
   std::string hint;     // appended to errors, e.g. "see configs/tat_cpu.json for every field"
   std::string prefix;   // dotted path of the object being read, e.g. "tokenizer." in a checkpoint
-  bool required = false;  // false: a missing field keeps its default (config files); true: it is an error (checkpoints)
+  bool required = false;  // false: a missing field keeps its default (config files); true: it is an error
+                          // (checkpoints), but for fields declared with added_field
 };
 
 // Reads an object into a struct's fields, checking each value's type and
