@@ -112,8 +112,10 @@ TextBatch make_text_batch(const std::vector<std::string>& captions, const PieceM
   float* word_data = batch.word_vectors.data_ptr<float>();
   for (int64_t i = 0; i < b; ++i) {
     const CaptionPieces& caption = split[static_cast<size_t>(i)];
-    std::vector<int> pieces_of_word(caption.words.size(), 0);
-    for (const int w : caption.word_of_piece) ++pieces_of_word[static_cast<size_t>(w)];
+    std::vector<int> pieces_of_word(caption.words.size(), 0);  // counted only for read_split_words_by_vector
+    if (config.read_split_words_by_vector) {
+      for (const int w : caption.word_of_piece) ++pieces_of_word[static_cast<size_t>(w)];
+    }
     for (size_t p = 0; p < caption.ids.size(); ++p) {
       ids[i][static_cast<int64_t>(p)] = caption.ids[p];
       mask[i][static_cast<int64_t>(p)] = true;
