@@ -3,7 +3,7 @@
 #include "commands.h"
 #include "model_options.h"
 
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/tat/metrics.h"

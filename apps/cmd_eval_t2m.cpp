@@ -3,7 +3,7 @@
 #include "commands.h"
 
 #include "nec/evaluator/t2m.h"
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 

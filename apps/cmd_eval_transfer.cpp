@@ -3,8 +3,8 @@
 #include "commands.h"
 
 #include "nec/motion/files.h"
-#include "nec/motion/preprocess.h"
-#include "nec/motion/transfer_check.h"
+#include "nec/corpus/preprocess.h"
+#include "nec/fitting/transfer_check.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>

@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 
 constexpr double kMaxSeconds = 60.0;
 
-// The caption sidecar of a BVH file: walk.bvh -> walk.txt (motion/captions.h).
+// The caption sidecar of a BVH file: walk.bvh -> walk.txt (corpus/captions.h).
 std::string sidecar_path(const std::string& bvh) { return fs::path(bvh).replace_extension(".txt").string(); }
 
 // OUT.bvh for one sample; OUT_1.bvh ... OUT_K.bvh for K.

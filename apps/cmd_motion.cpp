@@ -2,13 +2,13 @@
 #include "command_line.h"
 #include "commands.h"
 
-#include "nec/motion/augment.h"
+#include "nec/corpus/augment.h"
 #include "nec/motion/bvh.h"
 #include "nec/motion/clip_file.h"
 #include "nec/motion/frame_rate.h"
 #include "nec/motion/names.h"
-#include "nec/motion/preprocess.h"
-#include "nec/motion/rest_pose.h"
+#include "nec/corpus/preprocess.h"
+#include "nec/corpus/rest_pose.h"
 
 #include <fmt/format.h>
 

@@ -2,7 +2,7 @@
 #include "command_line.h"
 #include "commands.h"
 
-#include "nec/motion/corpus.h"
+#include "nec/corpus/corpus.h"
 
 #include <fmt/format.h>
 

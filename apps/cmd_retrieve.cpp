@@ -5,7 +5,7 @@
 
 #include "nec/evaluator/retrieval.h"
 #include "nec/evaluator/retrieval_index.h"
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/tat/session.h"

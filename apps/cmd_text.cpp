@@ -2,7 +2,7 @@
 #include "command_line.h"
 #include "commands.h"
 
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/names.h"
 #include "nec/text/glove_import.h"
 #include "nec/text/word_vectors.h"

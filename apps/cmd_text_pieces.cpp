@@ -2,7 +2,7 @@
 #include "command_line.h"
 #include "commands.h"
 
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/error.h"
 #include "nec/text/caption_text.h"
 #include "nec/text/piece_model.h"

@@ -5,7 +5,6 @@
 
 #include "nec/diffusion/training.h"
 #include "nec/motion/error.h"
-#include "nec/owo/checkpoint.h"
 #include "nec/train/config_fields.h"
 
 #include <fmt/format.h>
@@ -51,59 +50,26 @@ int run_train_diffusion(int argc, char** argv) {
   if (stage == diffusion::DiffusionStage::kMotion && train::read_config_json(config_path).contains("model")) {
     throw InputError(config_path, 0, "the motion stage takes its model from the pose model (--pose): remove \"model\"");
   }
-  if (cli.integer("--steps") < 0) throw UsageError("--steps must be >= 0");
-  if (cli.integer("--steps") > 0) config.steps = cli.integer("--steps");
+  apply_steps_option(cli, config.steps);
   TrainingRun run = start_training_run(cli, out_dir);
   const DatasetCache cache = read_cache(cli.value("--data"));
 
-  // The frozen encoder, the piece model and (motion stage) the pose model: as given, or from the checkpoint resumed.
-  owo::OwoPretrainer owo{nullptr};
-  std::string pieces_path = cli.value("--pieces");
-  std::optional<diffusion::LoadedDiffusion> base;
-  if (run.resume) {
-    base = diffusion::load_diffusion_checkpoint(out_dir);
-  } else if (stage == diffusion::DiffusionStage::kMotion) {
-    if (cli.value("--pose").empty()) throw UsageError("--pose POSE_CKPT is required for the motion stage unless --resume");
-    base = diffusion::load_diffusion_checkpoint(cli.value("--pose"));
-    if (base->info.stage != diffusion::DiffusionStage::kPose) {
-      throw InputError(cli.value("--pose"), 0, "is a motion-stage model; --pose takes the pose stage's checkpoint");
-    }
-  } else if (cli.value("--owo").empty() || pieces_path.empty()) {
+  if (!run.resume && stage == diffusion::DiffusionStage::kMotion && cli.value("--pose").empty()) {
+    throw UsageError("--pose POSE_CKPT is required for the motion stage unless --resume");
+  }
+  if (!run.resume && stage == diffusion::DiffusionStage::kPose &&
+      (cli.value("--owo").empty() || cli.value("--pieces").empty())) {
     throw UsageError("--owo OWO_CKPT and --pieces SPM are required for the pose stage unless --resume");
   }
-  if (base) {
-    owo = base->owo;
-    pieces_path = base->piece_model_path;  // read before the first save replaces the directory
-    if (stage == diffusion::DiffusionStage::kPose) config.model = base->model->config();
-  } else {
-    owo = owo::load_owo_checkpoint(cli.value("--owo")).model;
-    config.model.skeleton_dim = owo->encoder->config().dim;
-    config.model.text.vocab_size = text::PieceModel::load(pieces_path).vocab_size();
-  }
-  const int64_t name_dim = owo->encoder->config().name_dim;
-  const int64_t word_dim = base ? base->model->config().text.word_dim : config.model.text.word_dim;
-  std::optional<text::WordVectors> vectors;
-  if (word_dim > 0 || name_dim > 0) {
-    vectors.emplace(text::WordVectors::load_checked(cli.value("--glove"), word_dim > 0 ? word_dim : name_dim));
-    if (word_dim > 0 && name_dim > 0 && word_dim != name_dim) {
-      throw InputError(vectors->path(), 0, fmt::format("the OwO encoder reads names of width {}, model.text.word_dim "
-                                                       "is {}: set it to {}", name_dim, word_dim, name_dim));
-    }
-  }
-  if (stage == diffusion::DiffusionStage::kPose) {
-    try {
-      config.validate();
-    } catch (const std::invalid_argument& e) {
-      throw InputError(config_path, 0, e.what());
-    }
-  }
+  diffusion::DiffusionTrainingInputs inputs =
+      diffusion::load_training_inputs(stage, config, run.resume ? out_dir : "", cli.value("--owo"), cli.value("--pieces"),
+                                      cli.value("--pose"), cli.value("--glove"));
+  if (stage == diffusion::DiffusionStage::kPose) validate_config(config, config_path);
 
-  std::optional<diffusion::LoadedDiffusion> pose;
-  if (stage == diffusion::DiffusionStage::kMotion) pose = std::move(base);
   std::optional<diffusion::DiffusionTrainer> trainer;
   try {
-    trainer.emplace(config, stage, cache, cli.value("--data"), owo, std::move(pose), pieces_path,
-                    vectors ? &*vectors : nullptr, run.device, run.ranks.get());
+    trainer.emplace(config, stage, cache, cli.value("--data"), inputs.owo, std::move(inputs.pose), inputs.piece_model_path,
+                    inputs.vectors ? &*inputs.vectors : nullptr, run.device, run.ranks.get());
   } catch (const std::invalid_argument& e) {
     throw InputError(config_path, 0, e.what());
   }

@@ -40,8 +40,7 @@ int run_train_evaluator(int argc, char** argv) {
   const std::string out_dir = cli.value("--out");
 
   evaluator::EvaluatorTrainConfig config = evaluator::read_evaluator_train_config(cli.value("--config"));
-  if (cli.integer("--steps") < 0) throw UsageError("--steps must be >= 0");
-  if (cli.integer("--steps") > 0) config.steps = cli.integer("--steps");
+  apply_steps_option(cli, config.steps);
   TrainingRun run = start_training_run(cli, out_dir);
   if (!run.resume && (cli.value("--owo").empty() || cli.value("--pieces").empty())) {
     throw UsageError("--owo OWO_CKPT and --pieces SPM are required unless --resume");
@@ -72,11 +71,7 @@ int run_train_evaluator(int argc, char** argv) {
                            std::to_string(config.model.text.word_dim) + ": set it to " + std::to_string(name_dim));
     }
   }
-  try {
-    config.validate();
-  } catch (const std::invalid_argument& e) {
-    throw InputError(cli.value("--config"), 0, e.what());
-  }
+  validate_config(config, cli.value("--config"));
 
   evaluator::EvaluatorTrainer trainer(config, cache, cli.value("--data"), owo, pieces_path, vectors ? &*vectors : nullptr,
                                       run.device, run.ranks.get());

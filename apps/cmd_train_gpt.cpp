@@ -38,8 +38,7 @@ int run_train_gpt(int argc, char** argv) {
   const std::string out_dir = cli.value("--out");
 
   gpt::GptTrainConfig config = gpt::read_gpt_train_config(cli.value("--config"));
-  if (cli.integer("--steps") < 0) throw UsageError("--steps must be >= 0");
-  if (cli.integer("--steps") > 0) config.steps = cli.integer("--steps");
+  apply_steps_option(cli, config.steps);
   TrainingRun run = start_training_run(cli, out_dir);
   if (!run.resume && (cli.value("--tat").empty() || cli.value("--pieces").empty())) {
     throw UsageError("--tat TAT_CKPT and --pieces SPM are required unless --resume");
@@ -64,11 +63,7 @@ int run_train_gpt(int argc, char** argv) {
   if (config.model.text.word_dim > 0) {
     vectors.emplace(text::WordVectors::load_checked(cli.value("--glove"), config.model.text.word_dim));
   }
-  try {
-    config.validate();
-  } catch (const std::invalid_argument& e) {
-    throw InputError(cli.value("--config"), 0, e.what());
-  }
+  validate_config(config, cli.value("--config"));
 
   gpt::GptTrainer trainer(config, cache, cli.value("--data"), tokenizer, tat_dir, pieces_path,
                           vectors ? &*vectors : nullptr, run.device, run.ranks.get());

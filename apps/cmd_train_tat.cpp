@@ -42,8 +42,7 @@ int run_train_tat(int argc, char** argv) {
   const std::string out_dir = cli.value("--out");
 
   tat::TatTrainConfig config = tat::read_tat_train_config(cli.value("--config"));
-  if (cli.integer("--steps") < 0) throw UsageError("--steps must be >= 0");
-  if (cli.integer("--steps") > 0) config.steps = cli.integer("--steps");
+  apply_steps_option(cli, config.steps);
   if (!cli.value("--kind").empty()) {
     try {
       config.model.kind = tat::tokenizer_kind_from_string(cli.value("--kind"));
@@ -61,11 +60,7 @@ int run_train_tat(int argc, char** argv) {
     config.model.max_joints = cache.max_joint_count();
   }
   if (config.model.kind == tat::TokenizerKind::NecVq) config.model.quantizer.layers = 1;
-  try {
-    config.validate();
-  } catch (const std::invalid_argument& e) {
-    throw InputError(cli.value("--config"), 0, e.what());
-  }
+  validate_config(config, cli.value("--config"));
   std::optional<text::WordVectors> vectors;
   if (owo->encoder->config().name_dim > 0 && config.model.kind != tat::TokenizerKind::ZeroPadRvq) {
     vectors.emplace(text::WordVectors::load_checked(cli.value("--glove"), owo->encoder->config().name_dim));

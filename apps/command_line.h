@@ -10,7 +10,7 @@
 // Usage problems throw UsageError; main turns them into exit code 2.
 #pragma once
 
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 
 #include <map>
 #include <stdexcept>

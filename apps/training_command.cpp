@@ -30,6 +30,11 @@ void declare_training_options(CommandLine& cli) {
              "data-parallel: how long a rank waits for the others before it stops with an error");
 }
 
+void apply_steps_option(const CommandLine& cli, int64_t& steps) {
+  if (cli.integer("--steps") < 0) throw UsageError("--steps must be >= 0");
+  if (cli.integer("--steps") > 0) steps = cli.integer("--steps");
+}
+
 std::optional<int> run_workers_if_asked(const CommandLine& cli, const std::string& kind, int argc, char** argv) {
   const int nproc = cli.integer("--nproc");
   if (nproc < 1) throw UsageError("--nproc must be >= 1");

@@ -6,6 +6,8 @@
 
 #include "command_line.h"
 
+#include "nec/motion/error.h"
+
 #include "nec/train/distributed.h"
 #include "nec/train/loop.h"
 
@@ -13,6 +15,7 @@
 
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 namespace nec::app {
@@ -24,6 +27,19 @@ void declare_training_options(CommandLine& cli);
 // train KIND` with the same arguments as N local workers (train/launch.h) and
 // returns their exit code; otherwise std::nullopt (this process trains).
 std::optional<int> run_workers_if_asked(const CommandLine& cli, const std::string& kind, int argc, char** argv);
+
+// --steps N: the step training ends at instead of the config's (0 keeps `steps`); UsageError when negative.
+void apply_steps_option(const CommandLine& cli, int64_t& steps);
+
+// config.validate(), its complaint reported as an InputError naming `config_path`.
+template <typename Config>
+void validate_config(const Config& config, const std::string& config_path) {
+  try {
+    config.validate();
+  } catch (const std::invalid_argument& e) {
+    throw InputError(config_path, 0, e.what());
+  }
+}
 
 struct TrainingRun {
   bool resume = false;

@@ -9,10 +9,10 @@
 // stddev and cv; scripts/bench.sh reads the medians. 1 MB = 10^6 bytes in bench.sh's table (Google Benchmark's
 // own console line uses 1024-based units).
 #include "nec/motion/bvh.h"
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/files.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 
 #include <benchmark/benchmark.h>
 

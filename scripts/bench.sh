@@ -77,10 +77,16 @@ bench_motion() {
   node - "$build"/bench_motion.json "$build"/peer_threejs.json <<'JS'
 const fs = require('fs');
 const [nec, peer] = process.argv.slice(2).map((p) => JSON.parse(fs.readFileSync(p, 'utf8')));
+// A missing row or a value that is not a finite number stops the table (it never prints NaN).
 const stat = (name, aggregate, field) => {
   const row = nec.benchmarks.find((b) => b.run_name.startsWith(name) && b.aggregate_name === aggregate);
-  return row[field];
+  const value = row ? row[field] : undefined;
+  if (!Number.isFinite(value)) throw new Error(`bench.sh: no finite ${field} of the ${aggregate} of ${name} in bench_motion.json`);
+  return value;
 };
+for (const key of ['median_mb_per_s', 'min_mb_per_s', 'max_mb_per_s', 'megabytes']) {
+  if (!Number.isFinite(peer[key])) throw new Error(`bench.sh: peer_threejs.json has no finite ${key}`);
+}
 const parse = stat('BM_ParseBvh', 'median', 'bytes_per_second') / 1e6;
 const parseCv = stat('BM_ParseBvh', 'cv', 'bytes_per_second') * 100;
 const fk = stat('BM_ForwardKinematics', 'median', 'items_per_second');
@@ -225,13 +231,10 @@ bench_evaluator() {
   OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive} "$build"/benchmarks/bench_evaluator --benchmark_format=console \
     --benchmark_out="$build"/bench_evaluator.json --benchmark_out_format=json >/dev/null
   "$python" - "$build"/bench_evaluator.json <<'PY'
-import json, sys
-rows = json.load(open(sys.argv[1]))["benchmarks"]
-def median(prefix, field="real_time"):
-    found = [r for r in rows if r["name"].startswith(prefix + "/") and r.get("aggregate_name") == "median"]
-    if not found:
-        raise SystemExit(f"bench.sh: no {prefix} in bench_evaluator's output")
-    return found[0][field]
+import sys
+sys.path.insert(0, "benchmarks")
+from bench_json import BenchRows
+median = BenchRows(sys.argv[1]).median
 print("""
 | evaluator (configs/evaluator_cpu.json), median of 5 | 1 thread | 2 threads |
 |---|---:|---:|""")
@@ -251,11 +254,10 @@ bench_gpt() {
   OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive} "$build"/benchmarks/bench_gpt --benchmark_format=console \
     --benchmark_out="$build"/bench_gpt.json --benchmark_out_format=json >/dev/null
   "$python" - "$build"/bench_gpt.json <<'PY'
-import json, sys
-rows = json.load(open(sys.argv[1]))["benchmarks"]
-def median(name, field="real_time"):
-    found = [r for r in rows if r["run_name"] == name and r.get("aggregate_name") == "median"]
-    return found[0][field] if found else float("nan")
+import sys
+sys.path.insert(0, "benchmarks")
+from bench_json import BenchRows
+median = BenchRows(sys.argv[1]).median
 print("""
 | generation, median of 5, 2 cores | value |
 |---|---:|""")
@@ -278,12 +280,11 @@ bench_diffusion() {
   "$build"/benchmarks/bench_diffusion --benchmark_format=console \
     --benchmark_out="$build"/bench_diffusion.json --benchmark_out_format=json >/dev/null
   "$python" - "$build"/bench_diffusion.json "${OMP_WAIT_POLICY:-default}" <<'PY'
-import json, sys
-rows = json.load(open(sys.argv[1]))["benchmarks"]
+import sys
+sys.path.insert(0, "benchmarks")
+from bench_json import BenchRows
+median = BenchRows(sys.argv[1]).median
 print(f"OMP_WAIT_POLICY={sys.argv[2]}")
-def median(name, field="real_time"):
-    found = [r for r in rows if r["run_name"].split("/iterations")[0] == name and r.get("aggregate_name") == "median"]
-    return found[0][field] if found else float("nan")
 print("""
 | diffusion sampling, 4-s motion, 24 joints, 50 steps, guidance 2.5; median of 3, 2 cores | s | peak memory, MB |
 |---|---:|---:|""")
@@ -317,11 +318,11 @@ bench_assets() {
   "$build"/benchmarks/bench_assets --benchmark_format=console \
     --benchmark_out="$build"/bench_assets.json --benchmark_out_format=json "$data" >/dev/null
   "$python" - "$build"/bench_assets.json "$data" <<'PY'
-import json, os, sys
-rows = json.load(open(sys.argv[1]))["benchmarks"]
-def median(name, field):
-    found = [r for r in rows if r["run_name"].split("/min_time")[0] == name and r.get("aggregate_name") == "median"]
-    return found[0][field] if found else float("nan")
+import os, sys
+sys.path.insert(0, "benchmarks")
+from bench_json import BenchRows, benchmark_name
+rows = BenchRows(sys.argv[1])
+median = rows.median
 stems = sorted(f[:-4] for f in os.listdir(sys.argv[2]) if f.endswith(".bvh"))
 print(f"""
 Median of 5 repetitions, one thread; {len(stems)} motions ({", ".join(stems)}), each as BVH and as Blender 3.4's FBX
@@ -336,10 +337,9 @@ for name, label in (("BM_ReadBvh", "BVH (nec's reader)"), ("BM_ReadFbx", "FBX (a
 print("""
 | write a motion onto an asset as GLB | joints | frames | ms |
 |---|---:|---:|---:|""")
-for r in rows:
-    if r["run_name"].startswith("BM_WriteGlbOntoAsset") and r.get("aggregate_name") == "median":
-        asset = r["run_name"].split("/min_time")[0][len("BM_WriteGlbOntoAsset/"):]
-        print(f"| {asset} | {r['joints']:.0f} | {r['frames']:.0f} | {r['real_time']:.1f} |")
+for r in rows.medians_of("BM_WriteGlbOntoAsset/"):
+    asset = benchmark_name(r["run_name"])[len("BM_WriteGlbOntoAsset/"):]
+    print(f"| {asset} | {rows.value(r, 'joints'):.0f} | {rows.value(r, 'frames'):.0f} | {rows.value(r, 'real_time'):.1f} |")
 print()
 PY
 }

@@ -2,12 +2,12 @@
 // positions, the real assets of Debian's assimp-testmodels, and the format
 // registry (FILE#ANIMATION, unknown types, folders of mixed files).
 #include "nec/assets/asset_reader.h"
-#include "nec/motion/augment.h"
+#include "nec/corpus/augment.h"
 #include "nec/motion/clip_file.h"
-#include "nec/motion/corpus.h"
+#include "nec/corpus/corpus.h"
 #include "nec/motion/error.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 
 #include "test_support.h"
 

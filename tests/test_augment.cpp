@@ -1,5 +1,5 @@
 // Rig augmentation keeps the motion of the joints it keeps.
-#include "nec/motion/augment.h"
+#include "nec/corpus/augment.h"
 #include "nec/motion/bvh.h"
 #include "nec/motion/kinematics.h"
 #include "nec/motion/names.h"

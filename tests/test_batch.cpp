@@ -1,6 +1,6 @@
 // Batch loader: shapes, padding and masks, crops, epochs, determinism and
 // on-the-fly rig augmentation, on synthetic caches built in memory.
-#include "nec/motion/batch.h"
+#include "nec/corpus/batch.h"
 #include "nec/motion/error.h"
 #include "nec/motion/kinematics.h"
 #include "test_support.h"

@@ -1,6 +1,6 @@
 // Captions: sidecar text files, CSV tables, Bandai labels (synthetic files in
 // a temporary folder, and the real Bandai JSON and file names when present).
-#include "nec/motion/captions.h"
+#include "nec/corpus/captions.h"
 #include "nec/motion/error.h"
 #include "test_support.h"
 

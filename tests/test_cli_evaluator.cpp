@@ -2,7 +2,7 @@
 // evaluator (and its best checkpoint), nec eval retrieval, nec retrieve with
 // its stored index, nec eval t2m, and the errors a user sees.
 #include "nec/motion/bvh.h"
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/files.h"
 #include "test_support.h"
 

@@ -6,8 +6,8 @@
 #include "nec/motion/clip_file.h"
 #include "nec/motion/files.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/preprocess.h"
-#include "nec/motion/transfer_check.h"
+#include "nec/corpus/preprocess.h"
+#include "nec/fitting/transfer_check.h"
 #include "nec/tat/tokens.h"
 #include "test_support.h"
 

@@ -2,7 +2,7 @@
 // zoo cache writes checkpoints, resumes where it stopped (taking the same
 // steps as a run that never stopped), stops on NaN with a message, refuses bad
 // configs and inputs naming the problem, and evaluates on held-out skeletons.
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/files.h"
 #include "nec/text/word_vectors.h"
 #include "test_support.h"

@@ -1,7 +1,7 @@
 // Corpus loading for `nec prepare`: discovery, dataset names, captions,
 // segmentation of long takes, and unreadable files.
 #include "nec/motion/bvh.h"
-#include "nec/motion/corpus.h"
+#include "nec/corpus/corpus.h"
 #include "nec/motion/error.h"
 #include "test_support.h"
 

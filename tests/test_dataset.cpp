@@ -1,7 +1,7 @@
 // Dataset cache: write/read round trip, checks on damaged caches, skeleton
 // dedupe, atomic replacement, splits (deterministic, held-out skeletons, one
 // split per source file) and the load time of 1,000 clips.
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/motion/kinematics.h"

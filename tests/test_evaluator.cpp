@@ -8,10 +8,10 @@
 #include "nec/evaluator/training.h"
 
 #include "nec/motion/bvh.h"
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/train/config_fields.h"
 #include "nec/train/loop.h"
 #include "nec/zoo/creature.h"

@@ -3,9 +3,9 @@
 // drift of the height is taken out while the body's bounce within a step
 // stays, settling brings a sunk or hovering body to the floor and leaves a
 // flight alone, and nothing but the root's height changes.
-#include "nec/motion/follow_ground.h"
+#include "nec/fitting/follow_ground.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/zoo/creature.h"
 #include "nec/zoo/motion_synthesis.h"
 

@@ -4,11 +4,11 @@
 // its path and a path bent away from its body are each steered back, turns of
 // the source are taken over, a body's own sway is kept, and nothing below the
 // root changes.
-#include "nec/motion/follow_heading.h"
+#include "nec/fitting/follow_heading.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/preprocess.h"
-#include "nec/motion/segment.h"
-#include "nec/motion/transfer_check.h"
+#include "nec/corpus/preprocess.h"
+#include "nec/corpus/segment.h"
+#include "nec/fitting/transfer_check.h"
 #include "nec/zoo/creature.h"
 #include "nec/zoo/motion_synthesis.h"
 

@@ -1,10 +1,10 @@
 // Foot locking on motion whose truth is known: zoo walks whose bodies outrun
 // their legs (the feet slide) get their plants back; a hand-built leg is
 // pinned exactly, fades in and out, and nothing else moves.
-#include "nec/motion/foot_lock.h"
+#include "nec/fitting/foot_lock.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/preprocess.h"
-#include "nec/motion/transfer_check.h"
+#include "nec/corpus/preprocess.h"
+#include "nec/fitting/transfer_check.h"
 #include "nec/zoo/creature.h"
 #include "nec/zoo/motion_synthesis.h"
 #include "test_support.h"

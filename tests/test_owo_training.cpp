@@ -3,7 +3,7 @@
 // trainer whose resumed steps equal the uninterrupted ones.
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/owo/graph.h"
 #include "nec/owo/skeleton_set.h"
 #include "nec/owo/training.h"

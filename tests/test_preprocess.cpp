@@ -1,7 +1,7 @@
 // Unified preprocessing: each step, the whole pipeline and its inverse.
 #include "nec/motion/bvh.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>

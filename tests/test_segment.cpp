@@ -3,7 +3,7 @@
 // heading invariance, and invariants on real MANN dog takes.
 #include "nec/motion/bvh.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/segment.h"
+#include "nec/corpus/segment.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>

@@ -1,10 +1,10 @@
 // Stepping after a source, on zoo walks whose gait is known: a target whose legs hold still while its body
 // travels (feet gliding, as decoded transfers come out) steps in the source's cadence, in the order of its
 // body plan; a target that already steps, or the source of a standing motion, changes nothing.
-#include "nec/motion/step_feet.h"
+#include "nec/fitting/step_feet.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/preprocess.h"
-#include "nec/motion/transfer_check.h"
+#include "nec/corpus/preprocess.h"
+#include "nec/fitting/transfer_check.h"
 #include "nec/zoo/creature.h"
 #include "nec/zoo/motion_synthesis.h"
 #include "test_support.h"

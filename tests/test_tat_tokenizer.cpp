@@ -1,7 +1,7 @@
 // TAT tokenizer: config, shapes of every kind, masking invariance, codes round
 // trip, parameter budget, and learning on procedural zoo clips.
 #include "nec/motion/features.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/tat/loss.h"
 #include "nec/tat/model_space.h"
 #include "nec/tat/tokenizer.h"

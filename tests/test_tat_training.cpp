@@ -1,9 +1,9 @@
 // TatTrainer: a run saved and resumed takes the steps of one that never stopped, on a decaying learning rate;
 // a resumed run with a later end goes on from the rate it had; configs that differ are refused.
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/owo/pretrain.h"
 #include "nec/tat/checkpoint.h"
 #include "nec/tat/training.h"

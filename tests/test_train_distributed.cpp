@@ -3,7 +3,7 @@
 #include "nec/train/distributed.h"
 #include "nec/train/launch.h"
 
-#include "nec/motion/batch.h"
+#include "nec/corpus/batch.h"
 
 #include <gtest/gtest.h>
 #include <torch/torch.h>

@@ -3,8 +3,8 @@
 // one skeleton; and what a broken transfer (frozen root, stretched bone) looks
 // like.
 #include "nec/motion/bvh.h"
-#include "nec/motion/preprocess.h"
-#include "nec/motion/transfer_check.h"
+#include "nec/corpus/preprocess.h"
+#include "nec/fitting/transfer_check.h"
 #include "nec/zoo/creature.h"
 #include "nec/zoo/motion_synthesis.h"
 #include "test_support.h"

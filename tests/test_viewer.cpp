@@ -5,7 +5,7 @@
 // page (clips, captions, three.js, nothing that reaches the network).
 #include "nec/motion/bvh.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/viewer/html.h"
 #include "nec/viewer/png.h"
 #include "nec/viewer/raster.h"

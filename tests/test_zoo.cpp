@@ -2,8 +2,8 @@
 // rotation, byte-for-byte determinism, and reading it back with the corpus
 // loader that `nec prepare` uses.
 #include "nec/motion/bvh.h"
-#include "nec/motion/captions.h"
-#include "nec/motion/corpus.h"
+#include "nec/corpus/captions.h"
+#include "nec/corpus/corpus.h"
 #include "nec/motion/files.h"
 #include "nec/zoo/zoo.h"
 

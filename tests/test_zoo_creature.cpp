@@ -3,7 +3,7 @@
 #include "nec/motion/bvh.h"
 #include "nec/motion/kinematics.h"
 #include "nec/motion/names.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/zoo/creature.h"
 
 #include <gtest/gtest.h>

@@ -4,7 +4,7 @@
 // trips through preprocessing, the IK utilities, and generation speed.
 #include "nec/motion/bvh.h"
 #include "nec/motion/kinematics.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/zoo/motion_synthesis.h"
 #include "test_support.h"
 

@@ -4,6 +4,7 @@
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/motion/random.h"
+#include "nec/owo/checkpoint.h"
 #include "nec/tat/batch_tensors.h"
 #include "nec/tat/inference.h"
 #include "nec/tat/model_space.h"
@@ -324,6 +325,44 @@ int64_t DiffusionTrainer::resume(const std::string& dir) {
                                                       state_path);
   train::seek_batches(*train_, state.data, state_path);
   return state.step;
+}
+
+DiffusionTrainingInputs load_training_inputs(DiffusionStage stage, DiffusionTrainConfig& config,
+                                             const std::string& resume_dir, const std::string& owo_dir,
+                                             const std::string& pieces_path, const std::string& pose_dir,
+                                             const std::string& glove_path) {
+  DiffusionTrainingInputs inputs;
+  inputs.piece_model_path = pieces_path;
+  std::optional<LoadedDiffusion> base;
+  if (!resume_dir.empty()) {
+    base = load_diffusion_checkpoint(resume_dir);
+  } else if (stage == DiffusionStage::kMotion) {
+    base = load_diffusion_checkpoint(pose_dir);
+    if (base->info.stage != DiffusionStage::kPose) {
+      throw InputError(pose_dir, 0, "is a motion-stage model; --pose takes the pose stage's checkpoint");
+    }
+  }
+  if (base) {
+    inputs.owo = base->owo;
+    inputs.piece_model_path = base->piece_model_path;  // read before the first save replaces the directory
+    if (stage == DiffusionStage::kPose) config.model = base->model->config();
+  } else {
+    inputs.owo = owo::load_owo_checkpoint(owo_dir).model;
+    config.model.skeleton_dim = inputs.owo->encoder->config().dim;
+    config.model.text.vocab_size = text::PieceModel::load(pieces_path).vocab_size();
+  }
+  const int64_t name_dim = inputs.owo->encoder->config().name_dim;
+  const int64_t word_dim = base ? base->model->config().text.word_dim : config.model.text.word_dim;
+  if (word_dim > 0 || name_dim > 0) {
+    inputs.vectors.emplace(text::WordVectors::load_checked(glove_path, word_dim > 0 ? word_dim : name_dim));
+    if (word_dim > 0 && name_dim > 0 && word_dim != name_dim) {
+      throw InputError(inputs.vectors->path(), 0,
+                       "the OwO encoder reads names of width " + std::to_string(name_dim) + ", model.text.word_dim is " +
+                           std::to_string(word_dim) + ": set it to " + std::to_string(name_dim));
+    }
+  }
+  if (stage == DiffusionStage::kMotion) inputs.pose = std::move(base);
+  return inputs;
 }
 
 }  // namespace nec::diffusion

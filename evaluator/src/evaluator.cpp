@@ -1,7 +1,7 @@
 // The evaluator model, its checkpoint directory, and embedding clips and captions.
 #include "nec/evaluator/evaluator.h"
 
-#include "nec/motion/batch.h"
+#include "nec/corpus/batch.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/owo/checkpoint.h"

@@ -1,7 +1,7 @@
 // R-Precision tables over a cache: mixed, within plan, creature words masked, floor.
 #include "nec/evaluator/retrieval.h"
 
-#include "nec/motion/batch.h"
+#include "nec/corpus/batch.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/motion/random.h"

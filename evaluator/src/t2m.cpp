@@ -3,7 +3,7 @@
 #include "nec/evaluator/t2m.h"
 
 #include "nec/evaluator/retrieval.h"
-#include "nec/motion/captions.h"
+#include "nec/corpus/captions.h"
 #include "nec/motion/error.h"
 #include "nec/motion/kinematics.h"
 #include "nec/text/caption_text.h"

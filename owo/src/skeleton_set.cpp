@@ -1,7 +1,7 @@
 // Skeletons of dataset caches for OwO pretraining: labels, hold-out split, rig augmentation.
 #include "nec/owo/skeleton_set.h"
 
-#include "nec/motion/augment.h"
+#include "nec/corpus/augment.h"
 #include "nec/motion/names.h"
 #include "nec/train/config_fields.h"
 

@@ -1,7 +1,7 @@
 // OwO pretraining runs: config file, learning-rate schedule, batches, training checkpoints.
 #include "nec/owo/training.h"
 
-#include "nec/motion/batch.h"
+#include "nec/corpus/batch.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/owo/checkpoint.h"

@@ -2,7 +2,7 @@
 #include "nec/tat/inference.h"
 
 #include "nec/motion/error.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/owo/graph.h"
 #include "nec/owo/joint_names.h"
 #include "nec/tat/fk.h"

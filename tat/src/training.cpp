@@ -1,7 +1,7 @@
 // Tokenizer training: config file, steps, validation, checkpoints and resume.
 #include "nec/tat/training.h"
 
-#include "nec/motion/augment.h"
+#include "nec/corpus/augment.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/tat/batch_tensors.h"

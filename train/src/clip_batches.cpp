@@ -1,7 +1,7 @@
 // Batches of clips for training: config fields, loader options, position.
 #include "nec/train/clip_batches.h"
 
-#include "nec/motion/augment.h"
+#include "nec/corpus/augment.h"
 #include "nec/motion/error.h"
 #include "nec/train/checkpoint_io.h"
 #include "nec/train/config_fields.h"

@@ -6,7 +6,7 @@
 
 #include "nec/motion/bvh.h"
 #include "nec/motion/clip_file.h"
-#include "nec/motion/captions.h"
+#include "nec/corpus/captions.h"
 #include "nec/motion/kinematics.h"
 #include "nec/motion/names.h"
 

@@ -15,7 +15,7 @@
 #include "nec/diffusion/noise_schedule.h"
 #include "nec/diffusion/sampling.h"
 #include "nec/motion/features.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/text/word_vectors.h"
 
 #include <optional>

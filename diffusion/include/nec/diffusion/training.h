@@ -26,7 +26,8 @@
 
 #include "nec/diffusion/checkpoint.h"
 #include "nec/diffusion/noise_schedule.h"
-#include "nec/motion/batch.h"
+#include "nec/text/word_vectors.h"
+#include "nec/corpus/batch.h"
 #include "nec/train/clip_batches.h"
 #include "nec/train/loop.h"
 #include "nec/train/optimizer.h"
@@ -88,6 +89,28 @@ at::Tensor denoising_loss(const at::Tensor& predicted, const at::Tensor& target,
 // each frame alone does not see, the jitter between frames whose errors are independent. -> ()
 at::Tensor velocity_loss(const at::Tensor& predicted, const at::Tensor& target, const at::Tensor& used,
                          int64_t global_items);
+
+// What a stage trains with besides its data: the frozen OwO encoder, the
+// piece model, the pose model (motion stage) and the word vectors the caption
+// and OwO encoders read (none when neither reads words).
+struct DiffusionTrainingInputs {
+  owo::OwoPretrainer owo{nullptr};
+  std::string piece_model_path;
+  std::optional<LoadedDiffusion> pose;
+  std::optional<text::WordVectors> vectors;
+};
+
+// The inputs from the checkpoint being resumed (`resume_dir` not empty), else
+// the pose stage's `owo_dir` and `pieces_path` or the motion stage's
+// `pose_dir` (a pose-stage checkpoint). Sets config.model's fields that come
+// from them: the pose model's whole config when a pose stage resumes, else the
+// skeleton width and vocabulary of a fresh one. InputError naming the file for
+// a damaged checkpoint, a motion-stage `pose_dir`, or word vectors whose width
+// differs from the OwO encoder's names.
+DiffusionTrainingInputs load_training_inputs(DiffusionStage stage, DiffusionTrainConfig& config,
+                                             const std::string& resume_dir, const std::string& owo_dir,
+                                             const std::string& pieces_path, const std::string& pose_dir,
+                                             const std::string& glove_path);
 
 class DiffusionTrainer {
  public:

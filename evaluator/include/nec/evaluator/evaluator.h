@@ -16,8 +16,8 @@
 
 #include "nec/evaluator/metrics.h"
 #include "nec/evaluator/motion_encoder.h"
-#include "nec/motion/dataset.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/dataset.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/owo/pretrain.h"
 #include "nec/text/piece_model.h"
 #include "nec/text/text_encoder.h"
@@ -39,7 +39,7 @@ class ConfigVisitor;
 namespace nec::evaluator {
 
 constexpr const char* kEvaluatorCheckpointFormat = "nec-evaluator";
-constexpr int kEvaluatorCheckpointVersion = 2;  // 2: clips in the canonical rest pose (motion/rest_pose.h)
+constexpr int kEvaluatorCheckpointVersion = 2;  // 2: clips in the canonical rest pose (corpus/rest_pose.h)
 constexpr const char* kBestCheckpointDir = "best";  // inside a training checkpoint
 
 // Hyper-parameters of the two encoders; saved with a model.

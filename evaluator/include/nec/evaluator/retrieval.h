@@ -15,7 +15,7 @@
 
 #include "nec/evaluator/evaluator.h"
 #include "nec/evaluator/metrics.h"
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/tat/session.h"
 
 #include <nlohmann/json.hpp>

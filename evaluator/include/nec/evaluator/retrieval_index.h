@@ -19,7 +19,7 @@
 #pragma once
 
 #include "nec/evaluator/evaluator.h"
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 
 #include <ATen/core/Tensor.h>
 

@@ -19,8 +19,8 @@
 
 #include "nec/evaluator/evaluator.h"
 #include "nec/evaluator/metrics.h"
-#include "nec/motion/dataset.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/dataset.h"
+#include "nec/corpus/preprocess.h"
 
 #include <nlohmann/json.hpp>
 

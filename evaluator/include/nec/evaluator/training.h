@@ -21,7 +21,7 @@
 #pragma once
 
 #include "nec/evaluator/evaluator.h"
-#include "nec/motion/batch.h"
+#include "nec/corpus/batch.h"
 #include "nec/train/clip_batches.h"
 #include "nec/train/loop.h"
 #include "nec/train/optimizer.h"

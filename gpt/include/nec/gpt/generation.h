@@ -14,7 +14,7 @@
 
 #include "nec/gpt/checkpoint.h"
 #include "nec/gpt/sampling.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/tat/session.h"
 
 #include <ATen/core/Tensor.h>

@@ -17,7 +17,7 @@
 // per clip in that order.
 #pragma once
 
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/owo/encoder.h"
 #include "nec/tat/session.h"
 #include "nec/text/word_vectors.h"

@@ -20,7 +20,7 @@
 
 #include "nec/gpt/model.h"
 #include "nec/gpt/token_set.h"
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/tat/session.h"
 #include "nec/train/loop.h"
 #include "nec/train/optimizer.h"

@@ -9,5 +9,9 @@ namespace nec {
 
 // The median (the mean of the two middle values for an even count); 0 for no values.
 double median(std::vector<double> values);
+// The upper of the two middle values for an even count (a value of the set); 0 for no values.
+double upper_median(std::vector<double> values);
+// The value at index floor(q × (n − 1)) of the sorted values, q in [0, 1]; 0 for no values.
+double lower_quantile(std::vector<double> values, double q);
 
 }  // namespace nec

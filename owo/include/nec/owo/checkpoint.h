@@ -26,7 +26,7 @@ namespace nec::owo {
 
 constexpr const char* kOwoCheckpointFormat = "nec-owo";  // config.json "format"
 // config.json "version" this nec reads and writes; 2: the LCA pointer's ancestry term (lca_ancestry.*);
-// 3: trained on skeletons in the canonical rest pose (motion/rest_pose.h).
+// 3: trained on skeletons in the canonical rest pose (corpus/rest_pose.h).
 constexpr int kOwoCheckpointVersion = 3;
 
 // What a checkpoint records besides the architecture.

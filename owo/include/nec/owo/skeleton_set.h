@@ -19,7 +19,7 @@
 // held out anywhere is never trained on.
 #pragma once
 
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/motion.h"
 #include "nec/motion/random.h"
 
@@ -69,7 +69,7 @@ SkeletonSet split_skeleton_set(const std::vector<PretrainSkeleton>& skeletons, c
 // True when `pattern` matches one of the skeleton's labels.
 bool matches_hold_out(const PretrainSkeleton& skeleton, const std::string& pattern);
 
-// Rig augmentation of one skeleton (motion/augment.h, on its rest pose).
+// Rig augmentation of one skeleton (corpus/augment.h, on its rest pose).
 struct AugmentOptions {
   double probability = 0.8;       // chance that a sample is augmented at all, e.g. 0.8
   double rest_pose = 0.5;         // chance of a rest pose taken from one of its poses (NECromancer C.1)

@@ -1,4 +1,4 @@
-// Dataset batches (motion/batch.h, plain arrays) as torch tensors.
+// Dataset batches (corpus/batch.h, plain arrays) as torch tensors.
 //
 //   BatchLoader loader(cache, Split::Train, options);
 //   BatchTensors x = to_tensors(loader.next()).to(torch::kCUDA);
@@ -7,7 +7,7 @@
 // The tensors own their memory (copied from the batch), so the batch may go.
 #pragma once
 
-#include "nec/motion/batch.h"
+#include "nec/corpus/batch.h"
 
 #include <ATen/core/Tensor.h>
 #include <c10/core/Device.h>

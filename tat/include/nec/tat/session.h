@@ -8,11 +8,11 @@
 //   decode_onto(session, tokens, "dragon.bvh", UpAxis::Auto, {&walk.clip}, "dragon_walk.bvh");
 #pragma once
 
-#include "nec/motion/follow_ground.h"
-#include "nec/motion/follow_heading.h"
-#include "nec/motion/foot_lock.h"
-#include "nec/motion/preprocess.h"
-#include "nec/motion/step_feet.h"
+#include "nec/fitting/follow_ground.h"
+#include "nec/fitting/follow_heading.h"
+#include "nec/fitting/foot_lock.h"
+#include "nec/corpus/preprocess.h"
+#include "nec/fitting/step_feet.h"
 #include "nec/tat/checkpoint.h"
 #include "nec/tat/inference.h"
 #include "nec/tat/tokens.h"

@@ -19,7 +19,7 @@
 // never stopped, on any number of ranks.
 #pragma once
 
-#include "nec/motion/batch.h"
+#include "nec/corpus/batch.h"
 #include "nec/owo/pretrain.h"
 #include "nec/tat/loss.h"
 #include "nec/tat/metrics.h"

@@ -9,7 +9,7 @@
 //   seek_batches(loader, state.data, "runs/tat/training.json");    // on resume
 #pragma once
 
-#include "nec/motion/batch.h"
+#include "nec/corpus/batch.h"
 
 #include <nlohmann/json.hpp>
 
@@ -22,7 +22,7 @@ namespace nec::train {
 class Communicator;
 class ConfigVisitor;
 
-// Rig augmentation of the training clips (motion/augment.h).
+// Rig augmentation of the training clips (corpus/augment.h).
 struct ClipAugmentConfig {
   double probability = 0.5;  // chance that an item's rig is augmented
   std::vector<std::string> kinds{"rest", "length", "remove", "subdivide"};  // one drawn uniformly per augmented item

@@ -19,7 +19,7 @@
 #pragma once
 
 #include "nec/motion/motion.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 
 #include <stdexcept>
 #include <string>

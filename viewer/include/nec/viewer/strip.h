@@ -20,7 +20,7 @@
 #pragma once
 
 #include "nec/motion/motion.h"
-#include "nec/motion/preprocess.h"
+#include "nec/corpus/preprocess.h"
 #include "nec/viewer/raster.h"
 
 #include <optional>

@@ -20,7 +20,7 @@
 // word the piece model does not know whole is read that way always.
 #pragma once
 
-#include "nec/motion/dataset.h"
+#include "nec/corpus/dataset.h"
 #include "nec/text/piece_model.h"
 #include "nec/text/word_vectors.h"
 

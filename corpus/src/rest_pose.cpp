@@ -1,0 +1,131 @@
+// Joint-frame conventions: re-expressing a rig, the mean-pose canonical rest, other authoring conventions.
+#include "nec/corpus/rest_pose.h"
+
+#include "nec/motion/kinematics.h"
+
+#include <Eigen/SVD>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace nec {
+namespace {
+
+void check_frame_count(const Skeleton& skeleton, const std::vector<Quat>& frames, const char* what) {
+  if (static_cast<int>(frames.size()) != skeleton.joint_count()) {
+    throw std::invalid_argument(std::string(what) + ": " + std::to_string(frames.size()) + " joint frames for " +
+                                std::to_string(skeleton.joint_count()) + " joints");
+  }
+}
+
+// The rotation nearest to `sum` (a sum of rotation matrices) in the Frobenius norm.
+Quat nearest_rotation(const Mat3& sum) {
+  if (sum.norm() < 1e-12) return Quat::Identity();
+  const Eigen::JacobiSVD<Mat3> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 fix = Mat3::Identity();
+  fix(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  return Quat(svd.matrixU() * fix * svd.matrixV().transpose()).normalized();
+}
+
+// A uniformly distributed unit quaternion (Shoemake), from the portable generator.
+Quat random_rotation(SplitMix64& rng) {
+  constexpr double kTwoPi = 6.28318530717958647692;
+  const double u1 = rng.uniform(), u2 = rng.uniform(), u3 = rng.uniform();
+  const double a = std::sqrt(1.0 - u1), b = std::sqrt(u1);
+  return Quat(b * std::cos(kTwoPi * u3), a * std::sin(kTwoPi * u2), a * std::cos(kTwoPi * u2), b * std::sin(kTwoPi * u3))
+      .normalized();
+}
+
+}  // namespace
+
+Skeleton reexpress_skeleton(const Skeleton& skeleton, const std::vector<Quat>& frames) {
+  check_frame_count(skeleton, frames, "reexpress_skeleton");
+  Skeleton out = skeleton;
+  for (int j = 1; j < out.joint_count(); ++j) out.offsets[j] = frames[out.parents[j]] * skeleton.offsets[j];
+  for (EndSite& site : out.end_sites) site.offset = frames[site.parent] * site.offset;
+  return out;
+}
+
+Clip reexpress_joint_frames(const Clip& clip, const std::vector<Quat>& frames) {
+  const Skeleton& s = clip.skeleton;
+  check_frame_count(s, frames, "reexpress_joint_frames");
+  Clip out = clip;
+  out.skeleton = reexpress_skeleton(s, frames);
+  Motion& m = out.motion;
+  for (int t = 0; t < m.frame_count; ++t) {
+    m.rotation(t, 0) = (clip.motion.rotation(t, 0) * frames[0].conjugate()).normalized();
+    for (int j = 1; j < s.joint_count(); ++j) {
+      const Quat& parent = frames[s.parents[j]];
+      m.rotation(t, j) = (parent * clip.motion.rotation(t, j) * frames[j].conjugate()).normalized();
+      m.translation(t, j) = parent * clip.motion.translation(t, j);
+    }
+  }
+  return out;
+}
+
+std::vector<Quat> inverse_frames(const std::vector<Quat>& frames) {
+  std::vector<Quat> out;
+  out.reserve(frames.size());
+  for (const Quat& f : frames) out.push_back(f.conjugate());
+  return out;
+}
+
+MeanPoseFrames::MeanPoseFrames(const Skeleton& skeleton)
+    : skeleton_(skeleton), sums_(skeleton.joint_count(), Mat3::Zero()) {}
+
+void MeanPoseFrames::add(const Motion& motion, const std::vector<Quat>& frames) {
+  const int joints = skeleton_.joint_count();
+  if (motion.joint_count != joints) {
+    throw std::invalid_argument("MeanPoseFrames::add: a motion of " + std::to_string(motion.joint_count) +
+                                " joints on a rig of " + std::to_string(joints));
+  }
+  if (!frames.empty()) check_frame_count(skeleton_, frames, "MeanPoseFrames::add");
+  if (motion.frame_count == 0) return;
+  const Pose pose = forward_kinematics(skeleton_, motion);
+  const Quat start_inverse = pose.rotation(0, 0).conjugate();
+  for (int t = 0; t < motion.frame_count; ++t) {
+    // The root's turn since frame 0 is the same in every convention (G -> G D cancels in G_t G_0^-1).
+    const Quat unturn = heading_rotation((pose.rotation(t, 0) * start_inverse).normalized()).conjugate();
+    for (int j = 0; j < joints; ++j) {
+      const Quat authored = frames.empty() ? pose.rotation(t, j) : pose.rotation(t, j) * frames[j];
+      sums_[j] += (unturn * authored).normalized().toRotationMatrix();
+    }
+  }
+}
+
+std::vector<Quat> MeanPoseFrames::frames() const {
+  std::vector<Quat> out;
+  out.reserve(sums_.size());
+  for (const Mat3& sum : sums_) out.push_back(nearest_rotation(sum));
+  return out;
+}
+
+std::vector<Quat> mean_pose_frames(const Clip& clip) {
+  MeanPoseFrames mean(clip.skeleton);
+  mean.add(clip.motion);
+  return mean.frames();
+}
+
+Clip reorient_joint_axes(const Clip& clip, JointAxes axes, SplitMix64& rng) {
+  const Skeleton& s = clip.skeleton;
+  std::vector<Quat> frames(s.joint_count(), Quat::Identity());
+  if (axes == JointAxes::Random) {
+    for (Quat& f : frames) f = random_rotation(rng);
+    return reexpress_joint_frames(clip, frames);
+  }
+  // The bone each joint's +X follows: to its first child, else to its end site.
+  std::vector<Vec3> bone(s.joint_count(), Vec3::Zero());
+  for (const EndSite& site : s.end_sites) {
+    if (bone[site.parent].isZero()) bone[site.parent] = site.offset;
+  }
+  for (int j = s.joint_count() - 1; j >= 1; --j) {
+    if (!s.offsets[j].isZero()) bone[s.parents[j]] = s.offsets[j];  // descending: the first child wins
+  }
+  for (int j = 0; j < s.joint_count(); ++j) {
+    if (!bone[j].isZero()) frames[j] = Quat::FromTwoVectors(bone[j], Vec3::UnitX()).normalized();
+  }
+  return reexpress_joint_frames(clip, frames);
+}
+
+}  // namespace nec

@@ -1,0 +1,112 @@
+// Internal to motion synthesis: the Synthesizer, which makes one clip from a
+// creature's rig and an effective spec, and the swing and foothold types of
+// its legs. Its steps live in synthesizer_*.cpp and motion_synthesis.cpp.
+#pragma once
+
+#include "motion_limits.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace nec::zoo::detail {
+
+struct PathWave {
+  double amplitude = 0.0;   // file units, 0 for bodies that do not follow a path
+  double wavelength = 1.0;  // file units
+};
+
+enum class SwingStyle {
+  Step,    // arc from one foothold to the next
+  Tuck,    // follows the body, folded under it (jumps, flight)
+  Strike,  // rises in front of the body and strikes the ground ahead (attacks)
+};
+
+// Where a foot stands: the tip on the ground and the foot's heading.
+struct Foothold {
+  Vec3 position = Vec3::Zero();
+  double yaw = 0.0;  // radians about +Y
+};
+
+struct Swing {
+  double begin = 0.0;
+  double end = 0.0;  // kInfinity: the foot never lands again
+  SwingStyle style = SwingStyle::Step;
+};
+
+// Makes one clip: the root trajectory and body per frame (plan_body), then the
+// legs (plan_legs, adjust_height, solve_legs); run() does it all, once.
+class Synthesizer {
+ public:
+  Synthesizer(const Creature& creature, const Rig& rig, const MotionSpec& spec);
+  SynthesizedMotion run();
+
+ private:
+  double time(int f) const { return (f - pad_) / fps_; }
+  size_t at(int f, int j) const { return static_cast<size_t>(f) * joint_count_ + j; }
+  double length_speed() const { return spec_.speed * rig_.body_length; }  // file units per second
+
+  PathWave path_wave() const;
+  void plan_travel();
+  void plan_body();
+  void pose_midline(int f, double t);
+  void pose_appendages(int f, double t);
+  void assemble_frame(int f);
+  void pose_wing(const Appendage& wing, int f, double t);
+  void plan_legs();
+  std::vector<Swing> leg_swings(size_t leg) const;
+  void adjust_height();
+  void solve_legs();
+
+  // Helpers.
+  double gait_clock(double t) const { return frequency_ * t; }
+  double gait_share(double t) const;  // 0 when standing still, 1 at full gait
+  Foothold neutral_foot(size_t leg, double t) const;
+  double attach_yaw(int f, int attach) const { return heading_angle(global_[at(f, attach)]); }
+  Vec3 swing_position(size_t leg, const Swing& swing, const Vec3& from, const Vec3& to, double t, int f) const;
+
+  const Creature& creature_;
+  const Skeleton& skeleton_;
+  const Rig& rig_;
+  MotionSpec spec_;
+  SplitMix64 style_;
+  int joint_count_ = 0;
+  int frames_ = 0;
+  int pad_ = 0;
+  int total_ = 0;
+  double fps_ = 30.0;
+  double reach_ = 1.0;  // leg reach or a body-size stand-in, file units
+
+  GaitPattern gait_;
+  double frequency_ = 0.0;
+  GaitTuning tuning_;
+  double move_begin_ = -kInfinity;  // gait swings may start in [move_begin_, move_end_)
+  double move_end_ = kInfinity;
+
+  // Style drawn from the seed.
+  double breath_rate_ = 0.3, breath_phase_ = 0.0, look_phase_ = 0.0, look_amount_ = 0.3, sway_phase_ = 0.0;
+  double step_scale_ = 1.0, tail_scale_ = 1.0;
+
+  // Per extended frame (total_).
+  std::vector<double> heading_;   // radians about +Y, + = left
+  std::vector<double> speed_;     // file units per second along the heading
+  std::vector<double> turn_;      // radians per second
+  std::vector<double> travelled_; // path length so far (0 at t = 0)
+  std::vector<Vec3> root_;        // root position
+  std::vector<double> pitch_, roll_;
+  std::vector<double> root_yaw_;  // root yaw relative to the heading
+  // Action timeline (seconds), set by plan_body for the actions that use them.
+  double event_a_ = 0.0, event_b_ = 0.0, event_c_ = 0.0, event_d_ = 0.0;
+  double altitude_ = 0.0;
+
+  std::vector<Quat> local_;       // (total_, J)
+  std::vector<Quat> global_;      // (total_, J) body FK (legs at rest)
+  std::vector<Vec3> position_;    // (total_, J)
+
+  // Legs.
+  std::vector<std::vector<Swing>> swings_;   // per leg
+  std::vector<std::vector<Vec3>> targets_;   // per leg, (total_) tip target
+  std::vector<std::vector<double>> foot_yaw_; // per leg, (total_) heading of the foot: fixed while planted
+  std::vector<std::vector<uint8_t>> stance_; // per leg, (total_)
+};
+
+}  // namespace nec::zoo::detail

@@ -1,0 +1,199 @@
+// Limbs that do not stand: fins, antennae and jaws; the frame's forward
+// kinematics with the arms aimed in the chest's frame; wings folded, spread
+// or beating for flight (Synthesizer::pose_appendages, assemble_frame, pose_wing).
+#include "synthesizer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace nec::zoo::detail {
+
+// Fins, antennae and jaws: local rotations.
+void Synthesizer::pose_appendages(int f, double t) {
+  const Action action = spec_.action;
+  const double share = gait_share(t);
+  // Fins: sculling pectorals, swaying median fins.
+  for (const Appendage& fin : rig_.fins) {
+    const std::vector<int>& joints = fin.limb->joints;
+    const double rate = action == Action::Idle ? 0.8 : 1.6;
+    if (fin.limb->side == Side::None) {
+      const double sway = radians(8.0) * std::sin(2.0 * kPi * rate * t);
+      for (size_t k = 0; k < joints.size(); ++k) local_[at(f, joints[k])] = yaw_rotation(sway / joints.size());
+    } else {
+      const double beat = std::sin(2.0 * kPi * rate * t + (fin.limb->side == Side::Right ? kPi : 0.0) * 0.0);
+      const double tuck = action == Action::Swim || action == Action::Attack ? radians(30.0) : radians(5.0);
+      local_[at(f, joints[0])] =
+          (axis_angle(fin.sweep_axis, tuck + radians(10.0) * std::cos(2.0 * kPi * rate * t)) *
+           axis_angle(fin.lift_axis, radians(15.0) * beat))
+              .normalized();
+    }
+  }
+  // Antennae: lagged sway.
+  for (const Limb* antenna : rig_.antennae) {
+    for (size_t k = 0; k < antenna->joints.size(); ++k) {
+      const double phase = 2.0 * kPi * 0.7 * t - 0.6 * k + sway_phase_ + (antenna->side == Side::Right ? 1.3 : 0.0);
+      local_[at(f, antenna->joints[k])] =
+          (yaw_rotation(radians(6.0) * std::sin(phase)) * axis_angle(Vec3::UnitX(), radians(5.0) * std::cos(phase * 0.7)))
+              .normalized();
+    }
+  }
+  // Jaws: open for attacks, a little while breathing hard.
+  for (const Limb* jaw : rig_.jaws) {
+    double open = 0.0;
+    if (action == Action::Attack) open = radians(30.0) * pulse(t, event_a_ + 0.15, event_b_, event_b_ + 0.05, event_b_ + 0.15);
+    if (action == Action::Gallop || action == Action::Run) open = radians(6.0) * share;
+    const Quat q = axis_angle(Vec3::UnitX(), open);
+    if (!jaw->joints.empty()) local_[at(f, jaw->joints[0])] = q;
+  }
+}
+
+// Converts the midline's global targets (in local_) into locals top-down,
+// adds arms, and runs forward kinematics for the frame.
+void Synthesizer::assemble_frame(int f) {
+  const Midline& m = rig_.midline;
+  const std::vector<int>& parents = skeleton_.parents;
+  for (int j = 0; j < joint_count_; ++j) {
+    const int p = parents[j];
+    const Quat parent_global = p >= 0 ? global_[at(f, p)] : Quat::Identity();
+    if (m.member[j]) {
+      const Quat target = local_[at(f, j)];
+      local_[at(f, j)] = (parent_global.conjugate() * target).normalized();
+    }
+    global_[at(f, j)] = (parent_global * local_[at(f, j)]).normalized();
+    position_[at(f, j)] = p >= 0 ? Vec3(position_[at(f, p)] + parent_global * skeleton_.offsets[j]) : root_[f];
+  }
+
+  // Arms: directions in the chest's heading frame, then aimed; wings after them.
+  const double t = time(f);
+  const double share = gait_share(t);
+  const double clock = gait_clock(t);
+  const Action action = spec_.action;
+  for (const Appendage& arm : rig_.arms) {
+    const std::vector<int>& joints = arm.limb->joints;
+    const int pivot = joints[arm.pivot];
+    const int parent = parents[pivot];
+    const double side = side_sign(arm.limb->side);
+    // Swing opposite to the same-side leg: forward while that leg is behind.
+    double same_side_phase = 0.0;
+    for (size_t i = 0; i < rig_.legs.size() && i < gait_.phases.size(); ++i) {
+      if (rig_.legs[i].side == arm.limb->side) same_side_phase = gait_.phases[i];
+    }
+    const bool running = action == Action::Run;
+    double swing = -radians(running ? 35.0 : 18.0) * share * std::cos(2.0 * kPi * (clock + same_side_phase));
+    double elbow = radians(running ? 85.0 : 20.0) * share + radians(10.0) * (1.0 - share);
+    double raise = 0.0;  // sideways, away from the body
+    if (action == Action::Sit) {
+      const double w = ramp_between(t, event_a_, event_b_);
+      swing = radians(45.0) * w;
+      elbow = radians(10.0) + radians(35.0) * w;
+    }
+    if (action == Action::Jump) {
+      const double kk = std::min(1.0, spec_.seconds / 3.0);
+      swing = -radians(40.0) * pulse(t, event_a_, event_b_, event_b_, event_b_ + 0.1 * kk) +
+              radians(60.0) * pulse(t, event_b_, event_b_ + 0.15 * kk, event_c_ - 0.1, event_c_ + 0.2);
+      elbow = radians(25.0);
+    }
+    if (action == Action::Attack && creature_.plan == BodyPlan::Biped) {
+      const bool striking = arm.limb->side == spec_.side;
+      const double windup = pulse(t, event_a_, event_b_ - 0.05, event_b_ - 0.05, event_b_);
+      const double strike = pulse(t, event_b_ - 0.05, event_b_ + 0.08, event_c_, event_d_);
+      const double guard = pulse(t, event_a_ - 0.3, event_a_, event_d_, event_d_ + 0.3);
+      if (striking) {
+        swing = radians(20.0) * guard - radians(25.0) * windup + radians(70.0) * strike;
+        elbow = radians(100.0) * guard * (1.0 - strike) + radians(5.0) * strike;
+      } else {
+        swing = radians(40.0) * guard;
+        elbow = radians(110.0) * guard;
+      }
+      raise = radians(5.0);
+    }
+    const Quat chest = yaw_rotation(heading_angle(global_[at(f, parent)]));
+    const Vec3 down(side * (0.12 + std::sin(raise)), -1.0, 0.0);
+    const Vec3 upper = chest * (axis_angle(Vec3::UnitX(), -swing) * down.normalized());
+    const Vec3 lower = chest * (axis_angle(Vec3::UnitX(), -(swing + elbow)) * Vec3(side * 0.05, -1.0, 0.0).normalized());
+    std::vector<int> chain(joints.begin() + arm.pivot, joints.end());
+    std::vector<Vec3> points(chain.size());
+    points[0] = position_[at(f, pivot)];
+    for (size_t k = 1; k < chain.size(); ++k) {
+      const Vec3& direction = k == 1 ? upper : lower;
+      points[k] = points[k - 1] + direction * arm.lengths[k - 1];
+    }
+    // Only the upper arm and forearm are aimed; the hand keeps its rest relation to the forearm.
+    const size_t aimed = std::min<size_t>(chain.size(), 3);
+    chain.resize(aimed);
+    points.resize(aimed);
+    aim_chain(skeleton_, chain, points, global_[at(f, parent)], &local_[at(f, 0)]);
+  }
+  for (const Appendage& wing : rig_.wings) pose_wing(wing, f, t);
+}
+
+// Wings: a direction per bone in the body's frame, blended between folded
+// along the body and spread, beating about the body's long axis with the
+// distal bones lagging; then aimed. Independent of the rest pose (a crouched
+// rest may already be folded).
+void Synthesizer::pose_wing(const Appendage& wing, int f, double t) {
+  const std::vector<int>& joints = wing.limb->joints;
+  const Action action = spec_.action;
+  const double T = spec_.seconds;
+  const double side = side_sign(wing.limb->side);
+  const double rate = creature_.plan == BodyPlan::Dragon ? 1.4 : 3.0;  // wing beats per second
+  double open = 0.0;       // 0 folded, 1 spread
+  double amplitude = 0.0;  // beat amplitude, radians
+  double beat_rate = rate;
+  double elevation = radians(8.0);
+  switch (action) {
+    case Action::Fly:
+      open = 1.0;
+      amplitude = radians(42.0);
+      break;
+    case Action::Glide:
+      open = 1.0;
+      elevation = radians(6.0) + radians(2.0) * std::sin(2.0 * kPi * 0.5 * t);
+      break;
+    case Action::TakeOff:
+      open = ramp_between(t, event_a_, event_b_ - 0.1);
+      amplitude = radians(50.0) * open;
+      beat_rate = 1.15 * rate;
+      break;
+    case Action::FlapWings:
+      open = pulse(t, 0.2, 0.5, T - 0.5, T - 0.2);
+      amplitude = radians(45.0) * open;
+      break;
+    default:
+      break;
+  }
+  const double phase = 2.0 * kPi * beat_rate * t;
+  // Folded directions (left wing; x mirrored for the right): humerus back, forearm forward, the rest back.
+  const Vec3 folded[3] = {Vec3(0.45, -0.15, -0.85).normalized(), Vec3(0.2, 0.0, 0.98).normalized(),
+                          Vec3(0.15, -0.05, -0.99).normalized()};
+  const Quat parent_global = global_[at(f, skeleton_.parents[joints[0]])];
+  const Quat& body = parent_global;  // wings pitch and bank with the chest
+  const size_t n = joints.size();
+  std::vector<Vec3> points(n);
+  points[0] = position_[at(f, joints[0])];
+  auto direction = [&](size_t bone) {  // bone `bone` runs from joints[bone] to the next joint (or the end site)
+    const double lag = 0.5 * static_cast<double>(bone);
+    const double e = elevation + amplitude * std::sin(phase - lag);
+    const double sweep = open * radians(8.0) * std::cos(phase - lag);
+    // Beating wings fold a little on the upstroke, distal bones only.
+    const double upstroke_fold = bone > 0 && amplitude > 0.0 ? 0.15 * open * (0.5 - 0.5 * std::sin(phase - lag)) : 0.0;
+    const Vec3 spread = axis_angle(Vec3::UnitY(), side * sweep) *
+                        (axis_angle(Vec3::UnitZ(), side * e) * Vec3(side, 0.0, -0.12).normalized());
+    Vec3 tuck = folded[std::min<size_t>(bone, 2)];
+    tuck.x() *= side;
+    const double w = std::clamp(1.0 - open + upstroke_fold, 0.0, 1.0);
+    return Vec3(body * ((1.0 - w) * spread + w * tuck).normalized());
+  };
+  for (size_t k = 1; k < n; ++k) points[k] = points[k - 1] + direction(k - 1) * skeleton_.offsets[joints[k]].norm();
+  const Quat last = aim_chain(skeleton_, joints, points, parent_global, &local_[at(f, 0)]);
+  // The last joint carries the wing tip's end site: aim it too.
+  for (const EndSite& site : skeleton_.end_sites) {
+    if (site.parent != joints[n - 1] || site.offset.norm() < 1e-12) continue;
+    const Vec3 want = direction(n - 1);
+    const Quat global = (Quat::FromTwoVectors(last * site.offset, want) * last).normalized();
+    local_[at(f, joints[n - 1])] = (last.conjugate() * global).normalized();
+    break;
+  }
+}
+
+}  // namespace nec::zoo::detail

@@ -1,0 +1,235 @@
+// The body per frame (Synthesizer::plan_body): the timelines of jump,
+// take-off, sit, lie down and attack, the root's height, pitch, roll and sway
+// for every action, then the limbs and midline posed frame by frame.
+#include "synthesizer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace nec::zoo::detail {
+
+void Synthesizer::plan_body() {
+  const double T = spec_.seconds;
+  const double k = std::min(1.0, T / 3.0);  // short clips compress the action timelines
+  switch (spec_.action) {
+    case Action::Jump:
+      event_a_ = std::max(0.2 * T, 0.3);        // crouch starts
+      event_b_ = event_a_ + 0.35 * k;           // push-off starts
+      event_c_ = event_b_ + 0.15 * k + 0.5 * k; // landing (lift-off at b + 0.15k, 0.5k flight)
+      event_d_ = event_c_ + 0.7 * k;            // standing again
+      break;
+    case Action::TakeOff:
+      event_a_ = std::max(0.15 * T, 0.25);      // crouch starts
+      event_b_ = event_a_ + 0.35 * k;           // lift-off
+      break;
+    case Action::Sit:
+    case Action::LieDown:
+      event_a_ = 0.15 * T;
+      event_b_ = event_a_ + std::min(1.4, 0.4 * T);
+      break;
+    case Action::Attack:
+      event_a_ = 0.2 * T;                       // wind-up
+      event_b_ = event_a_ + 0.45 * k;           // strike
+      event_c_ = event_b_ + 0.4 * k;            // strike held, recovery starts
+      event_d_ = event_c_ + 0.7 * k;            // recovered
+      break;
+    default:
+      break;
+  }
+  plan_travel();
+
+  // Base heights.
+  const double stand = rig_.stand_height;
+  altitude_ = stand + 1.5 * rig_.body_length;
+  root_yaw_.assign(total_, 0.0);
+  pitch_.assign(total_, 0.0);
+  roll_.assign(total_, 0.0);
+  const double r = reach_;
+  for (int f = 0; f < total_; ++f) {
+    const double t = time(f);
+    double y = stand;
+    double pitch = 0.0, roll = 0.0, yaw = 0.0;
+    Vec3 local_offset = Vec3::Zero();  // body-frame offset (x left, z forward)
+    const double breath = std::sin(2.0 * kPi * breath_rate_ * t + breath_phase_);
+    const double share = gait_share(t);
+    const double clock = gait_clock(t);
+    switch (spec_.action) {
+      case Action::Idle:
+      case Action::FlapWings:
+        y += 0.008 * r * breath;
+        local_offset.x() = 0.02 * r * std::sin(2.0 * kPi * 0.13 * t + sway_phase_);
+        if (spec_.action == Action::FlapWings) {
+          const double flap = std::sin(2.0 * kPi * (creature_.plan == BodyPlan::Dragon ? 1.3 : 2.6) * t);
+          y += 0.03 * r * flap * pulse(t, 0.2, 0.5, T - 0.5, T - 0.2);
+        }
+        break;
+      case Action::Walk:
+      case Action::Trot:
+      case Action::Run:
+      case Action::Gallop:
+      case Action::Turn: {
+        if (creature_.plan == BodyPlan::Biped || creature_.plan == BodyPlan::Bird) {
+          yaw = radians(spec_.action == Action::Run ? 7.0 : 5.0) * std::sin(2.0 * kPi * clock) * share;
+          roll = radians(2.0) * std::sin(2.0 * kPi * clock) * share;
+          local_offset.x() = 0.025 * r * std::sin(2.0 * kPi * clock + 0.5 * kPi) * share;
+          pitch = -radians(spec_.action == Action::Run ? 8.0 : 2.0) * share;
+        } else if (spec_.action == Action::Gallop) {
+          pitch = radians(5.0) * std::sin(2.0 * kPi * clock) * share;
+        } else if (spec_.action == Action::Trot) {
+          roll = radians(1.5) * std::sin(2.0 * kPi * clock) * share;
+        }
+        break;
+      }
+      case Action::Jump: {
+        const double t_lo = event_b_ + 0.15 * k;
+        const double crouch = 0.22 * r;
+        const double launch = 0.06 * r;
+        const double apex = 0.45 * r;
+        if (t < event_b_) {
+          y -= crouch * ramp_between(t, event_a_, event_b_);
+        } else if (t < t_lo) {
+          y += (-crouch) + (crouch + launch) * ramp_between(t, event_b_, t_lo);
+        } else if (t < event_c_) {
+          const double u = (t - t_lo) / (event_c_ - t_lo);
+          y += launch + 4.0 * apex * u * (1.0 - u);
+        } else {
+          const double absorb = 0.2 * r;
+          const double down = ramp_between(t, event_c_, event_c_ + 0.2 * k);
+          const double up = ramp_between(t, event_c_ + 0.25 * k, event_d_);
+          y += launch * (1.0 - down) - absorb * down * (1.0 - up);
+        }
+        pitch = -radians(8.0) * pulse(t, event_a_, event_b_, event_b_, t_lo) +
+                radians(6.0) * pulse(t, t_lo, t_lo + 0.1, event_c_ - 0.2 * k, event_c_) -
+                radians(6.0) * pulse(t, event_c_, event_c_ + 0.1, event_c_ + 0.2, event_d_);
+        break;
+      }
+      case Action::Sit: {
+        const double w = ramp_between(t, event_a_, event_b_);
+        if (creature_.plan == BodyPlan::Biped) {
+          // Squat down and back onto the ground, leaning forward on the way.
+          y = stand + (0.3 * r - stand) * w;
+          local_offset.z() = -0.45 * r * w;
+          pitch = -radians(25.0) * pulse(t, event_a_, 0.5 * (event_a_ + event_b_), 0.5 * (event_a_ + event_b_), event_b_ + 0.3) -
+                  radians(5.0) * w;
+        } else if (creature_.plan == BodyPlan::Bird) {
+          y = stand + (0.45 * r - stand) * w;
+        } else {
+          // Hindquarters down, chest up on straight front legs.
+          const double hips = 0.4 * r;
+          y = stand + (hips - stand) * w;
+          local_offset.z() = -0.1 * r * w;
+          double chest_rise = 0.0;
+          for (const LegRig& leg : rig_.legs) {
+            if (!leg.usable || leg.pair != 0) continue;
+            const Vec3 shoulder = leg.hip_rest;
+            const double radius = std::hypot(shoulder.y(), shoulder.z());
+            const double phi = std::atan2(shoulder.y(), shoulder.z());
+            const double wanted = (stand + shoulder.y() - 0.05 * r) - hips;
+            if (radius > 1e-9) chest_rise = std::asin(std::clamp(wanted / radius, -0.8, 0.8)) - phi;
+            break;
+          }
+          pitch = std::clamp(chest_rise, 0.0, radians(40.0)) * w;
+        }
+        y += 0.006 * r * breath * w;
+        break;
+      }
+      case Action::LieDown: {
+        const double w = ramp_between(t, event_a_, event_b_);
+        const bool sprawler = creature_.plan == BodyPlan::Hexapod || creature_.plan == BodyPlan::Spider ||
+                              creature_.plan == BodyPlan::Centipede;
+        const double low = sprawler ? 0.12 * r : 0.32 * r;
+        y = stand + (std::min(low, stand) - stand) * w;
+        y += 0.006 * r * breath;
+        break;
+      }
+      case Action::Attack: {
+        const double windup = pulse(t, event_a_, event_b_ - 0.05, event_b_ - 0.05, event_b_);
+        const double strike = pulse(t, event_b_ - 0.05, event_b_ + 0.08, event_c_, event_d_);
+        switch (creature_.plan) {
+          case BodyPlan::Biped:
+            yaw = radians(25.0) * side_sign(spec_.side) * (windup - 1.4 * strike);
+            local_offset.z() = 0.08 * r * strike;
+            break;
+          case BodyPlan::Hexapod:
+          case BodyPlan::Spider:
+            pitch = radians(18.0) * pulse(t, event_a_, event_b_, event_b_ + 0.05, event_c_) - radians(6.0) * strike;
+            local_offset.z() = -0.1 * r * windup + 0.15 * r * strike;
+            y -= 0.05 * r * windup;
+            break;
+          case BodyPlan::Bird: {
+            // Three quick pecks.
+            const double peck = pulse(t, event_a_, event_b_, event_d_ - 0.2, event_d_);
+            pitch = -radians(20.0) * peck;
+            break;
+          }
+          case BodyPlan::Fish:
+          case BodyPlan::Snake:
+          case BodyPlan::Centipede:
+            break;
+          default:
+            local_offset.z() = -0.12 * r * windup + 0.3 * r * strike;
+            y -= 0.08 * r * windup + 0.04 * r * strike;
+            pitch = radians(6.0) * windup - radians(8.0) * strike;
+            yaw = radians(12.0) * side_sign(spec_.side) * strike;
+            break;
+        }
+        y += 0.008 * r * breath;
+        break;
+      }
+      case Action::TakeOff: {
+        const double crouch = 0.18 * r * pulse(t, event_a_, event_b_ - 0.12 * k, event_b_ - 0.12 * k, event_b_);
+        const double climb = t > event_b_ ? (t - event_b_) : 0.0;
+        const double rise = (0.5 * r) * ramp_between(t, event_b_ - 0.12 * k, event_b_ + 0.3 * k) +
+                            0.35 * rig_.body_length * climb * climb / std::max(T - event_b_, 0.5);
+        y = stand - crouch + rise;
+        pitch = radians(14.0) * pulse(t, event_b_ - 0.1, event_b_ + 0.3, T - 0.6, T + 1.0) - radians(10.0) * crouch / r;
+        break;
+      }
+      case Action::Fly: {
+        const double flap_rate = creature_.plan == BodyPlan::Dragon ? 1.4 : 3.0;
+        y = altitude_ + 0.03 * rig_.body_length * std::sin(2.0 * kPi * flap_rate * t + 0.5 * kPi);
+        roll = -std::clamp(0.6 * turn_[f], -radians(35.0), radians(35.0));
+        pitch = radians(3.0);
+        break;
+      }
+      case Action::Glide:
+        y = altitude_ + 0.1 * length_speed() * (0.5 * T - t);
+        roll = -std::clamp(0.7 * turn_[f], -radians(40.0), radians(40.0));
+        pitch = -radians(3.0) + radians(1.5) * std::sin(2.0 * kPi * 0.4 * t + sway_phase_);
+        break;
+      case Action::Swim:
+      case Action::Slither:
+        y = rig_.rest_height;
+        break;
+      default:
+        break;
+    }
+    if (creature_.plan == BodyPlan::Fish) {
+      y = std::max(rig_.rest_height, 0.4 * rig_.body_length);
+      if (spec_.action == Action::Idle) y += 0.01 * rig_.body_length * breath;
+    }
+    if (creature_.plan == BodyPlan::Snake) y = rig_.rest_height;
+    // Path followers sit on their undulating path, off the centre line.
+    const PathWave wave = path_wave();
+    if (wave.amplitude > 0.0) {
+      local_offset.x() += wave.amplitude * std::sin(2.0 * kPi * travelled_[f] / wave.wavelength);
+    }
+    const Vec3 offset = yaw_rotation(heading_[f]) * local_offset;
+    root_[f] = Vec3(root_[f].x() + offset.x(), y, root_[f].z() + offset.z());
+    root_yaw_[f] = yaw;
+    pitch_[f] = pitch;
+    roll_[f] = roll;
+  }
+
+  local_.assign(static_cast<size_t>(total_) * joint_count_, Quat::Identity());
+  global_.assign(local_.size(), Quat::Identity());
+  position_.assign(local_.size(), Vec3::Zero());
+  for (int f = 0; f < total_; ++f) {
+    const double t = time(f);
+    pose_appendages(f, t);
+    pose_midline(f, t);
+    assemble_frame(f);
+  }
+}
+
+}  // namespace nec::zoo::detail
