@@ -25,6 +25,7 @@
 #include "nec/tat/synthetic.h"
 #include "nec/text/caption_text.h"
 #include "nec/text/piece_model.h"
+#include "nec/text/sentence_encoder.h"
 #include "nec/text/text_encoder.h"
 #include "nec/text/word_vectors.h"
 #include "nec/train/heap.h"
@@ -38,6 +39,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <map>
 #include <random>
 #include <set>
@@ -117,18 +119,47 @@ Setup& setup() {
   return s;
 }
 
+// The next kBatch captions of `all`, going round.
+std::vector<std::string> next_batch(const std::vector<std::string>& all, size_t& next) {
+  std::vector<std::string> batch;
+  for (int64_t i = 0; i < kBatch; ++i) batch.push_back(all[next++ % all.size()]);
+  return batch;
+}
+
 void BM_EncodeCaptions(benchmark::State& state) {
   torch::set_num_threads(static_cast<int>(state.range(0)));
   Setup& s = setup();
   const std::vector<std::string> all = captions();
   size_t next = 0;
   for (auto _ : state) {
-    std::vector<std::string> batch;
-    for (int64_t i = 0; i < kBatch; ++i) batch.push_back(all[next++ % all.size()]);
+    const std::vector<std::string> batch = next_batch(all, next);
     c10::InferenceMode inference;
     const at::Tensor out = s.model->embed_text(
         nec::text::make_text_batch(batch, *s.pieces, &*s.vectors, s.model->config().text, "bench"));
     benchmark::DoNotOptimize(out.data_ptr());
+  }
+  state.counters["captions_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations() * kBatch), benchmark::Counter::kIsRate);
+}
+
+// The pretrained sentence encoder (text/sentence_encoder.h) on the same batches: pieces, graph, sentence vectors.
+void BM_EncodeSentences(benchmark::State& state) {
+  torch::set_num_threads(static_cast<int>(state.range(0)));
+  static std::optional<nec::text::SentenceEncoder> encoder;
+  if (!encoder) {
+    if (!fs::exists(nec::text::default_sentence_encoder_dir() + "/model.json")) {
+      state.SkipWithError("no sentence encoder: run scripts/setup_sentence_encoder.sh");
+      return;
+    }
+    encoder.emplace(nec::text::default_sentence_encoder_dir());
+  }
+  const std::vector<std::string> all = captions();
+  size_t next = 0;
+  for (auto _ : state) {
+    const std::vector<std::string> batch = next_batch(all, next);
+    c10::InferenceMode inference;
+    const nec::text::SentenceEncoding out = (*encoder)->encode(batch);
+    benchmark::DoNotOptimize(out.sentence.data_ptr());
   }
   state.counters["captions_per_s"] =
       benchmark::Counter(static_cast<double>(state.iterations() * kBatch), benchmark::Counter::kIsRate);
@@ -207,6 +238,7 @@ void common(Registered* b, int64_t iterations) {
 
 void register_all() {
   common(benchmark::RegisterBenchmark("BM_EncodeCaptions", BM_EncodeCaptions)->ArgNames({"threads"})->Arg(1)->Arg(2), 20);
+  common(benchmark::RegisterBenchmark("BM_EncodeSentences", BM_EncodeSentences)->ArgNames({"threads"})->Arg(1)->Arg(2), 20);
   for (const int64_t joints : {22, 100}) {
     common(benchmark::RegisterBenchmark("BM_EmbedMotions", BM_EmbedMotions)
                ->ArgNames({"joints", "threads"})

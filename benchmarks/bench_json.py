@@ -34,6 +34,10 @@ class BenchRows:
         for row in self.rows:
             if benchmark_name(row["run_name"]) == name and row.get("aggregate_name") == aggregate:
                 return row
+        errors = {row.get("error_message") for row in self.rows
+                  if benchmark_name(row["run_name"]) == name and row.get("error_occurred")}
+        if errors:
+            raise SystemExit(f"bench.sh: {name} did not run: {'; '.join(sorted(errors))}")
         known = sorted({benchmark_name(row["run_name"]) for row in self.rows})
         raise SystemExit(f"bench.sh: no {aggregate} of {name} in {self.path} (it holds: {', '.join(known)})")
 

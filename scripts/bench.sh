@@ -240,6 +240,8 @@ print("""
 |---|---:|---:|""")
 print("| captions encoded per second (batches of 32) | " +
       " | ".join(f"{median(f'BM_EncodeCaptions/threads:{t}', 'captions_per_s'):.0f}" for t in (1, 2)) + " |")
+print("| the same by the pretrained sentence encoder (pieces, graph, sentence vectors) | " +
+      " | ".join(f"{median(f'BM_EncodeSentences/threads:{t}', 'captions_per_s'):.0f}" for t in (1, 2)) + " |")
 for joints in (22, 100):
     print(f"| clips embedded per second, {joints} joints, 120 frames (OwO + motion encoder) | " +
           " | ".join(f"{median(f'BM_EmbedMotions/joints:{joints}/threads:{t}', 'clips_per_s'):.1f}" for t in (1, 2)) + " |")

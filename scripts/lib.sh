@@ -26,3 +26,29 @@ ensure_three() {
     npm install --prefix benchmarks --no-audit --no-fund
   fi
 }
+
+# fetch_npm_tarball LABEL PACKAGE VERSION SHA512 TARBALL: `npm pack`s PACKAGE@VERSION
+# into TARBALL unless a file with that SHA-512 (npm's dist.integrity, in hex) is
+# there already; a download with another checksum stops the script.
+fetch_npm_tarball() {
+  local label=$1 package=$2 version=$3 sha512=$4 tarball=$5 work packed
+  if [ -f "$tarball" ] && [ "$(sha512sum "$tarball" | cut -d' ' -f1)" = "$sha512" ]; then return 0; fi
+  ensure_packages "$label" nodejs npm
+  mkdir -p "$(dirname "$tarball")"
+  work=$(mktemp -d "$(dirname "$tarball")/.npm-pack.XXXXXX")
+  echo "$label: downloading $package@$version with npm pack"
+  if ! (cd "$work" && npm pack "$package@$version" --silent >/dev/null); then
+    rm -rf "$work"
+    echo "$label: npm pack $package@$version failed" >&2
+    return 1
+  fi
+  packed=$(ls "$work"/*.tgz)
+  if [ "$(sha512sum "$packed" | cut -d' ' -f1)" != "$sha512" ]; then
+    echo "$label: $(basename "$packed") has SHA-512 $(sha512sum "$packed" | cut -d' ' -f1), expected $sha512" >&2
+    rm -rf "$work"
+    return 1
+  fi
+  mv "$packed" "$tarball"
+  rm -rf "$work"
+  echo "$label: $package $version -> $tarball"
+}

