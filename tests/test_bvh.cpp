@@ -6,6 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <charconv>
+#include <cstring>
+#include <random>
+
 namespace nec {
 namespace {
 
@@ -175,6 +179,39 @@ TEST(BvhReader, ErrorNamesTheLine) {
     FAIL() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("lines.bvh:20:"), std::string::npos) << e.what();
+  }
+}
+
+// Numbers are read as the correctly rounded double of their text, whatever its form: the root's position
+// channels come back bit for bit as std::from_chars reads them (plain decimals take a faster path).
+TEST(BvhReader, NumbersAreTheCorrectlyRoundedDoubleOfTheirText) {
+  std::mt19937 rng(7);
+  std::vector<std::string> texts = {"0", "-0", "-0.0", "+1.5", ".5", "5.", "-.25", "1e3", "-2.5E-3", "123456789012345678",
+                                    "9007199254740993", "0.1000000000000000055511151231257827", "1.7976931348623157e308",
+                                    "4.9e-324", "0.0000000000000000000001", "-12.345678901234567890"};
+  std::uniform_int_distribution<int> digit(0, 9), length(1, 20), point(0, 20), sign(0, 1);
+  while (texts.size() % 3 != 0 || texts.size() < 3000) {
+    std::string text = sign(rng) ? "-" : "";
+    const int digits = length(rng), dot = point(rng);
+    for (int i = 0; i < digits; ++i) {
+      if (i == dot) text += '.';
+      text += static_cast<char>('0' + digit(rng));
+    }
+    texts.push_back(text);
+  }
+  std::string bvh = "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 3 Xposition Yposition Zposition\n"
+                    "  End Site\n  {\n    OFFSET 0 1 0\n  }\n}\nMOTION\nFrames: " +
+                    std::to_string(texts.size() / 3) + "\nFrame Time: 0.0333333\n";
+  for (size_t i = 0; i < texts.size(); i += 3) bvh += texts[i] + " " + texts[i + 1] + " " + texts[i + 2] + "\n";
+  const testing::TempDir dir;
+  const Clip clip = read_bvh(dir.write("numbers.bvh", bvh));
+  for (size_t i = 0; i < texts.size(); ++i) {
+    const std::string& text = texts[i];
+    const char* first = text.data() + (text[0] == '+' ? 1 : 0);
+    double expected = 0.0;
+    std::from_chars(first, text.data() + text.size(), expected);
+    const double got = clip.motion.translation(static_cast<int>(i / 3), 0)[static_cast<int>(i % 3)];
+    ASSERT_EQ(std::memcmp(&got, &expected, sizeof got), 0) << text << " read as " << got << ", expected " << expected;
   }
 }
 

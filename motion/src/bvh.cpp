@@ -5,6 +5,7 @@
 #include "nec/motion/files.h"
 
 #include <charconv>
+#include <cstdint>
 #include <cmath>
 #include <cstring>
 
@@ -26,12 +27,36 @@ std::string excerpt(std::string_view text) {
   return out;
 }
 
+// A plain decimal ("-12.3456", at most 19 digits, no exponent) whose digits as an integer w are at most 2^53
+// and that has at most 22 digits after the point is w / 10^k with both operands exact doubles, so one IEEE
+// division gives the correctly rounded value: the same double std::from_chars returns (Clinger's fast path).
+// Motion lines are almost all such numbers; anything else returns false and goes to std::from_chars.
+bool parse_plain_decimal(const char* first, const char* last, double& value) {
+  static constexpr double kPowersOfTen[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                                            1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+  const bool negative = first != last && *first == '-';
+  const char* p = first + (negative ? 1 : 0);
+  uint64_t digits_value = 0;
+  int digits = 0, fraction = 0;
+  for (; p != last && static_cast<unsigned>(*p - '0') < 10; ++p, ++digits) digits_value = digits_value * 10 + (*p - '0');
+  if (p != last && *p == '.') {
+    for (++p; p != last && static_cast<unsigned>(*p - '0') < 10; ++p, ++digits, ++fraction) {
+      digits_value = digits_value * 10 + (*p - '0');
+    }
+  }
+  if (p != last || digits == 0 || digits > 19 || digits_value > (uint64_t{1} << 53) || fraction > 22) return false;
+  const double magnitude = static_cast<double>(digits_value) / kPowersOfTen[fraction];
+  value = negative ? -magnitude : magnitude;
+  return true;
+}
+
 // Parses one finite number that must fill `token` exactly; false otherwise.
 bool parse_double(std::string_view token, double& value) {
   const char* first = token.data();
   const char* last = first + token.size();
   if (first != last && *first == '+') ++first;
   if (first == last) return false;
+  if (parse_plain_decimal(first, last, value)) return true;
   const auto [ptr, ec] = std::from_chars(first, last, value);
   return ec == std::errc() && ptr == last && std::isfinite(value);
 }
