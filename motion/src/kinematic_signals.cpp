@@ -154,6 +154,7 @@ bool is_upright(Activity a) {
 }
 bool is_moving(Activity a) { return a == Activity::Walk || a == Activity::Trot || a == Activity::Run; }
 bool is_low(Activity a) { return a == Activity::Lie || a == Activity::Sit; }
+
 std::string_view activity_name(Activity activity) {
   switch (activity) {
     case Activity::Lie:

@@ -3,18 +3,14 @@
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
+#include "nec/text/fetched_data.h"
 
 #include <nlohmann/json.hpp>
 #include <unicode/normalizer2.h>
 #include <unicode/unistr.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <filesystem>
-
-#ifndef NEC_REPOSITORY_DIR
-#define NEC_REPOSITORY_DIR "."
-#endif
 
 namespace nec::text {
 namespace {
@@ -44,12 +40,7 @@ std::u32string runner_input(std::string_view text) {
 
 }  // namespace
 
-std::string default_sentence_encoder_dir() {
-  const char* home = std::getenv("NEC_HOME");
-  const std::filesystem::path base =
-      home && *home ? std::filesystem::path(home) : std::filesystem::path(NEC_REPOSITORY_DIR) / "third_party_cache";
-  return (base / "use-lite-0.2.0").string();
-}
+std::string default_sentence_encoder_dir() { return fetched_data_path("use-lite-0.2.0"); }
 
 SentencePieces SentencePieces::load(const std::string& vocab_path) {
   if (!std::filesystem::exists(vocab_path)) {

@@ -3,6 +3,7 @@
 #include "nec/text/word_vectors.h"
 
 #include "nec/text/caption_text.h"
+#include "nec/text/fetched_data.h"
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
@@ -22,10 +23,6 @@
 #include <queue>
 #include <stdexcept>
 #include <utility>
-
-#ifndef NEC_REPOSITORY_DIR
-#define NEC_REPOSITORY_DIR "."
-#endif
 
 namespace nec::text {
 namespace {
@@ -70,11 +67,7 @@ double norm_of(const float* v, int dim) {
 
 }  // namespace
 
-std::string default_word_vectors_path() {
-  const char* home = std::getenv("NEC_HOME");
-  if (home != nullptr && *home != '\0') return (std::filesystem::path(home) / "glove-100d.bin").string();
-  return (std::filesystem::path(NEC_REPOSITORY_DIR) / "third_party_cache" / "glove-100d.bin").string();
-}
+std::string default_word_vectors_path() { return fetched_data_path("glove-100d.bin"); }
 
 std::vector<std::string> canonical_words(std::string_view joint_name) {
   return caption_words(canonical_joint_name(joint_name));

@@ -79,7 +79,7 @@ class GraphWeights {
     std::memcpy(&value, bytes_.data() + entry.offset, 4);
     return value;
   }
-  bool has(std::string_view tail) const { return count(tail) > 0; }
+  bool has(std::string_view tail) const { return !named(tail).empty(); }
   [[noreturn]] void fail(const std::string& problem) const {
     throw InputError(model_path_, 0, problem + "; not the sentence encoder nec reads (" + kSentenceEncoderHint + ")");
   }
@@ -90,16 +90,19 @@ class GraphWeights {
     std::vector<int64_t> shape;
     size_t offset = 0;
   };
-  static bool matches(const std::string& name, std::string_view tail) {
-    return name.size() >= tail.size() && name.compare(name.size() - tail.size(), tail.size(), tail) == 0;
-  }
-  size_t count(std::string_view tail) const {
-    return static_cast<size_t>(
-        std::count_if(entries_.begin(), entries_.end(), [&](const auto& e) { return matches(e.first, tail); }));
+  // Every weight whose name ends with `tail`.
+  std::vector<const std::pair<const std::string, Entry>*> named(std::string_view tail) const {
+    std::vector<const std::pair<const std::string, Entry>*> out;
+    for (const auto& entry : entries_) {
+      const std::string& name = entry.first;
+      if (name.size() >= tail.size() && name.compare(name.size() - tail.size(), tail.size(), tail) == 0) out.push_back(&entry);
+    }
+    return out;
   }
   const std::pair<const std::string, Entry>& find(std::string_view tail) const {
-    if (count(tail) != 1) fail("has " + std::to_string(count(tail)) + " weights named *" + std::string(tail));
-    return *std::find_if(entries_.begin(), entries_.end(), [&](const auto& e) { return matches(e.first, tail); });
+    const auto found = named(tail);
+    if (found.size() != 1) fail("has " + std::to_string(found.size()) + " weights named *" + std::string(tail));
+    return *found.front();
   }
 
   std::string model_path_;
