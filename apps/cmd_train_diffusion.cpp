@@ -26,7 +26,7 @@ int run_train_diffusion(int argc, char** argv) {
   cli.option("--config", "CFG.json", "", "training config (see configs/diffusion_pose_cpu.json, diffusion_motion_cpu.json)", true);
   cli.option("--data", "CACHE", "", "dataset cache (from `nec prepare`); clips without captions train the unconditioned model", true);
   cli.option("--owo", "OWO_CKPT", "", "pose stage: pretrained OwO checkpoint (from `nec train owo`)");
-  cli.option("--pieces", "SPM", "", "pose stage: caption piece model (from `nec text train-tokenizer`)");
+  cli.option("--pieces", "SPM", "", "pose stage: caption piece model (from `nec text train-tokenizer`) when model.text.backbone is \"pieces\"");
   cli.option("--pose", "POSE_CKPT", "", "motion stage: the pose-stage checkpoint it builds on");
   cli.option("--out", "CKPT", "", "checkpoint directory to write", true);
   cli.option("--steps", "N", "0", "the step training ends at, instead of the config's (0 = keep)");
@@ -57,9 +57,9 @@ int run_train_diffusion(int argc, char** argv) {
   if (!run.resume && stage == diffusion::DiffusionStage::kMotion && cli.value("--pose").empty()) {
     throw UsageError("--pose POSE_CKPT is required for the motion stage unless --resume");
   }
-  if (!run.resume && stage == diffusion::DiffusionStage::kPose &&
-      (cli.value("--owo").empty() || cli.value("--pieces").empty())) {
-    throw UsageError("--owo OWO_CKPT and --pieces SPM are required for the pose stage unless --resume");
+  if (!run.resume && stage == diffusion::DiffusionStage::kPose) {
+    if (cli.value("--owo").empty()) throw UsageError("--owo OWO_CKPT is required for the pose stage unless --resume");
+    check_caption_inputs(config.model.text, cli.value("--pieces"), config_path);
   }
   diffusion::DiffusionTrainingInputs inputs =
       diffusion::load_training_inputs(stage, config, run.resume ? out_dir : "", cli.value("--owo"), cli.value("--pieces"),
@@ -68,7 +68,7 @@ int run_train_diffusion(int argc, char** argv) {
 
   std::optional<diffusion::DiffusionTrainer> trainer;
   try {
-    trainer.emplace(config, stage, cache, cli.value("--data"), inputs.owo, std::move(inputs.pose), inputs.piece_model_path,
+    trainer.emplace(config, stage, cache, cli.value("--data"), inputs.owo, std::move(inputs.pose), inputs.captions,
                     inputs.vectors ? &*inputs.vectors : nullptr, run.device, run.ranks.get());
   } catch (const std::invalid_argument& e) {
     throw InputError(config_path, 0, e.what());

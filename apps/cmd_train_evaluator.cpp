@@ -26,7 +26,7 @@ int run_train_evaluator(int argc, char** argv) {
   cli.option("--config", "CFG.json", "", "training config (see configs/evaluator_cpu.json)", true);
   cli.option("--data", "CACHE", "", "dataset cache with captions (from `nec prepare`)", true);
   cli.option("--owo", "OWO_CKPT", "", "pretrained OwO checkpoint (from `nec train owo`); not needed with --resume");
-  cli.option("--pieces", "SPM", "", "caption piece model (from `nec text train-tokenizer`); not needed with --resume");
+  cli.option("--pieces", "SPM", "", "caption piece model (from `nec text train-tokenizer`) when model.text.backbone is \"pieces\"; not needed with --resume");
   cli.option("--out", "CKPT", "", "checkpoint directory to write", true);
   cli.option("--steps", "N", "0", "the step training ends at, instead of the config's (0 = keep)");
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
@@ -42,8 +42,9 @@ int run_train_evaluator(int argc, char** argv) {
   evaluator::EvaluatorTrainConfig config = evaluator::read_evaluator_train_config(cli.value("--config"));
   apply_steps_option(cli, config.steps);
   TrainingRun run = start_training_run(cli, out_dir);
-  if (!run.resume && (cli.value("--owo").empty() || cli.value("--pieces").empty())) {
-    throw UsageError("--owo OWO_CKPT and --pieces SPM are required unless --resume");
+  if (!run.resume) {
+    if (cli.value("--owo").empty()) throw UsageError("--owo OWO_CKPT is required unless --resume");
+    check_caption_inputs(config.model.text, cli.value("--pieces"), cli.value("--config"));
   }
   const DatasetCache cache = read_cache(cli.value("--data"));
   // The frozen encoder and the piece model: the ones given, or those of the checkpoint being resumed.
@@ -52,13 +53,12 @@ int run_train_evaluator(int argc, char** argv) {
   if (run.resume) {
     evaluator::LoadedEvaluator resumed = evaluator::load_evaluator_checkpoint(out_dir);
     owo = resumed.owo;
-    pieces_path = resumed.piece_model_path;  // read before the first save replaces the directory
+    pieces_path = resumed.captions.piece_model_path();  // read before the first save replaces the directory
   } else {
     owo = owo::load_owo_checkpoint(cli.value("--owo")).model;
   }
-  const text::PieceModel pieces = text::PieceModel::load(pieces_path);
+  text::CaptionReader captions = text::CaptionReader::for_training(config.model.text, pieces_path);
   config.model.motion.joint_embedding_dim = owo->encoder->config().dim;
-  config.model.text.vocab_size = pieces.vocab_size();
   const int64_t name_dim = owo->encoder->config().name_dim;
   std::optional<text::WordVectors> vectors;
   if (config.model.text.word_dim > 0 || name_dim > 0) {
@@ -73,7 +73,7 @@ int run_train_evaluator(int argc, char** argv) {
   }
   validate_config(config, cli.value("--config"));
 
-  evaluator::EvaluatorTrainer trainer(config, cache, cli.value("--data"), owo, pieces_path, vectors ? &*vectors : nullptr,
+  evaluator::EvaluatorTrainer trainer(config, cache, cli.value("--data"), owo, std::move(captions), vectors ? &*vectors : nullptr,
                                       run.device, run.ranks.get());
   const int64_t start_step = run.resume ? trainer.resume(out_dir) : 0;
   if (run.is_main()) {

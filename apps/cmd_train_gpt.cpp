@@ -25,7 +25,7 @@ int run_train_gpt(int argc, char** argv) {
   cli.option("--config", "CFG.json", "", "training config (see configs/gpt_cpu.json)", true);
   cli.option("--data", "CACHE", "", "dataset cache with captions (from `nec prepare`)", true);
   cli.option("--tat", "TAT_CKPT", "", "tokenizer checkpoint (from `nec train tat`); not needed with --resume");
-  cli.option("--pieces", "SPM", "", "caption piece model (from `nec text train-tokenizer`); not needed with --resume");
+  cli.option("--pieces", "SPM", "", "caption piece model (from `nec text train-tokenizer`) when model.text.backbone is \"pieces\"; not needed with --resume");
   cli.option("--out", "CKPT", "", "checkpoint directory to write", true);
   cli.option("--steps", "N", "0", "the step training ends at, instead of the config's (0 = keep)");
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
@@ -40,8 +40,9 @@ int run_train_gpt(int argc, char** argv) {
   gpt::GptTrainConfig config = gpt::read_gpt_train_config(cli.value("--config"));
   apply_steps_option(cli, config.steps);
   TrainingRun run = start_training_run(cli, out_dir);
-  if (!run.resume && (cli.value("--tat").empty() || cli.value("--pieces").empty())) {
-    throw UsageError("--tat TAT_CKPT and --pieces SPM are required unless --resume");
+  if (!run.resume) {
+    if (cli.value("--tat").empty()) throw UsageError("--tat TAT_CKPT is required unless --resume");
+    check_caption_inputs(config.model.text, cli.value("--pieces"), cli.value("--config"));
   }
   const DatasetCache cache = read_cache(cli.value("--data"));
   // The tokenizer and the piece model: the ones given, or those inside the checkpoint being resumed
@@ -50,22 +51,21 @@ int run_train_gpt(int argc, char** argv) {
   if (run.resume) {
     const gpt::LoadedGpt resumed = gpt::load_gpt_checkpoint(out_dir);
     tat_dir = resumed.tat_dir;
-    pieces_path = resumed.piece_model_path;
+    pieces_path = resumed.captions.piece_model_path();
   }
   tat::TokenizerSession tokenizer = tat::open_tokenizer_session(tat_dir, cli.value("--glove"), -1);
-  const text::PieceModel pieces = text::PieceModel::load(pieces_path);
   const tat::TatConfig& tat = tokenizer.model.tokenizer->config();
   config.model.codebook_layers = tat.quantizer.layers;
   config.model.codebook_size = tat.quantizer.codebook_size;
   config.model.skeleton_dim = tokenizer.model.owo->encoder->config().dim;
-  config.model.text.vocab_size = pieces.vocab_size();
+  text::CaptionReader captions = text::CaptionReader::for_training(config.model.text, pieces_path);
   std::optional<text::WordVectors> vectors;
   if (config.model.text.word_dim > 0) {
     vectors.emplace(text::WordVectors::load_checked(cli.value("--glove"), config.model.text.word_dim));
   }
   validate_config(config, cli.value("--config"));
 
-  gpt::GptTrainer trainer(config, cache, cli.value("--data"), tokenizer, tat_dir, pieces_path,
+  gpt::GptTrainer trainer(config, cache, cli.value("--data"), tokenizer, tat_dir, std::move(captions),
                           vectors ? &*vectors : nullptr, run.device, run.ranks.get());
   const int64_t start_step = run.resume ? trainer.resume(out_dir) : 0;
   if (run.is_main()) {

@@ -35,6 +35,15 @@ void apply_steps_option(const CommandLine& cli, int64_t& steps) {
   if (cli.integer("--steps") > 0) steps = cli.integer("--steps");
 }
 
+void check_caption_inputs(const text::TextEncoderConfig& text, const std::string& pieces_path,
+                          const std::string& config_path) {
+  validate_config(text, config_path);
+  if (text.backbone == text::kPiecesBackbone && pieces_path.empty()) {
+    throw UsageError("--pieces SPM is required: the config's model.text.backbone is \"pieces\" (or set it to \"" +
+                     std::string(text::kUseLiteBackbone) + "\")");
+  }
+}
+
 std::optional<int> run_workers_if_asked(const CommandLine& cli, const std::string& kind, int argc, char** argv) {
   const int nproc = cli.integer("--nproc");
   if (nproc < 1) throw UsageError("--nproc must be >= 1");

@@ -7,6 +7,7 @@
 #include "command_line.h"
 
 #include "nec/motion/error.h"
+#include "nec/text/text_encoder.h"
 
 #include "nec/train/distributed.h"
 #include "nec/train/loop.h"
@@ -40,6 +41,12 @@ void validate_config(const Config& config, const std::string& config_path) {
     throw InputError(config_path, 0, e.what());
   }
 }
+
+// Before a fresh training loads anything: checks the text config
+// (InputError naming `config_path`) and that --pieces was given when it reads
+// pieces (UsageError).
+void check_caption_inputs(const text::TextEncoderConfig& text, const std::string& pieces_path,
+                          const std::string& config_path);
 
 struct TrainingRun {
   bool resume = false;

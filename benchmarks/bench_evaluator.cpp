@@ -3,11 +3,13 @@
 //
 //   bench_evaluator [--configs=DIR] [benchmark flags]
 //
-// - BM_EncodeCaptions/threads:N: make_text_batch + the text encoder (eval mode)
-//   on batches of 32 corpus-like captions; counter captions_per_s. The piece
-//   model is trained at start on those captions (BPE, at most 300 pieces) and
-//   the word vectors are random 100-d rows for their words, written to a
-//   temporary folder.
+// - BM_EncodeCaptions/threads:N: the config's caption reader + text encoder
+//   (eval mode) on batches of 32 corpus-like captions; counter captions_per_s.
+//   With the use-lite backbone that is the sentence encoder and the head on
+//   it; with pieces, the piece model is trained at start on those captions
+//   (BPE, at most 300 pieces) and the word vectors are random 100-d rows for
+//   their words, written to a temporary folder.
+// - BM_EncodeSentences/threads:N: the sentence encoder alone on those batches.
 // - BM_EmbedMotions/joints:J/threads:N: OwO joint embeddings of the batch's
 //   skeletons (configs/owo_cpu.json's encoder, untrained, without names) +
 //   the motion encoder on 32 random 120-frame clips (4 s at 30 fps); counter clips_per_s.
@@ -71,10 +73,10 @@ std::vector<std::string> captions() {
   return out;
 }
 
-// The piece model, word vectors and evaluator every benchmark shares.
+// The caption reader, word vectors and evaluator (configs/evaluator_cpu.json) every benchmark shares.
 struct Setup {
   fs::path folder;
-  std::optional<nec::text::PieceModel> pieces;
+  nec::text::CaptionReader reader;
   std::optional<nec::text::WordVectors> vectors;
   nec::evaluator::Evaluator model{nullptr};
   nec::owo::OwoPretrainer owo{nullptr};
@@ -85,7 +87,6 @@ struct Setup {
     nec::text::PieceTrainOptions options;
     options.vocab_size = 300;
     nec::text::train_piece_model(captions(), options, (folder / "spm.model").string());
-    pieces.emplace(nec::text::PieceModel::load((folder / "spm.model").string()));
     std::set<std::string> words;
     for (const std::string& caption : captions()) {
       for (const std::string& word : nec::text::caption_words(caption)) words.insert(word);
@@ -107,7 +108,7 @@ struct Setup {
     owo = nec::owo::OwoPretrainer(owo_config, nec::owo::PretrainConfig{});
     owo->eval();
     config.model.motion.joint_embedding_dim = owo_config.dim;
-    config.model.text.vocab_size = pieces->vocab_size();
+    reader = nec::text::CaptionReader::for_training(config.model.text, (folder / "spm.model").string());
     model = nec::evaluator::Evaluator(config.model);
     model->eval();
   }
@@ -134,8 +135,7 @@ void BM_EncodeCaptions(benchmark::State& state) {
   for (auto _ : state) {
     const std::vector<std::string> batch = next_batch(all, next);
     c10::InferenceMode inference;
-    const at::Tensor out = s.model->embed_text(
-        nec::text::make_text_batch(batch, *s.pieces, &*s.vectors, s.model->config().text, "bench"));
+    const at::Tensor out = s.model->embed_text(s.reader.read(batch, &*s.vectors, "bench"));
     benchmark::DoNotOptimize(out.data_ptr());
   }
   state.counters["captions_per_s"] =
@@ -215,8 +215,7 @@ void BM_RetrievalQuery(benchmark::State& state) {
   size_t next = 0;
   for (auto _ : state) {
     c10::InferenceMode inference;
-    const at::Tensor query = s.model->embed_text(nec::text::make_text_batch(
-        {all[next++ % all.size()]}, *s.pieces, &*s.vectors, s.model->config().text, "query"));
+    const at::Tensor query = s.model->embed_text(s.reader.read({all[next++ % all.size()]}, &*s.vectors, "query"));
     const std::vector<nec::evaluator::Match> top = index.nearest_clips(query, 5, {});
     benchmark::DoNotOptimize(top.data());
   }

@@ -94,7 +94,7 @@ TEST_F(CliTrain, DispatchByModel) {
   const CommandResult no_pieces =
       run_nec("train evaluator --config " + write("e.json", "{}") + " --data " + cache() + " --out " + path("e") + " --owo x");
   EXPECT_EQ(no_pieces.exit_code, 2) << no_pieces.output;
-  EXPECT_TRUE(contains(no_pieces.output, "--owo OWO_CKPT and --pieces SPM are required unless --resume")) << no_pieces.output;
+  EXPECT_TRUE(contains(no_pieces.output, "--pieces SPM is required: the config's model.text.backbone is \"pieces\"")) << no_pieces.output;
   EXPECT_FALSE(std::filesystem::exists(path("e")));
   const CommandResult eval = run_nec("eval frob");
   EXPECT_EQ(eval.exit_code, 2);

@@ -87,6 +87,10 @@ class EvaluatorTest : public testing::CorpusTextTest {
  protected:
   EvaluatorTest() : vectors_(text::WordVectors::load(vectors_path())) {}
 
+  text::CaptionReader reader_for(EvaluatorTrainConfig config) const {
+    return text::CaptionReader::for_training(config.model.text, pieces_path());
+  }
+
   EvaluatorTrainConfig small_config() const {
     EvaluatorTrainConfig config;
     const text::PieceModel pieces = text::PieceModel::load(pieces_path());
@@ -177,14 +181,14 @@ TEST(MotionEncoder, AClipsEmbeddingDoesNotDependOnWhatItIsBatchedWith) {
 TEST_F(EvaluatorTest, TrainingLearnsToFindTheCaptionOfEachMotion) {
   const DatasetCache cache = action_cache(false);
   const EvaluatorTrainConfig config = small_config();
-  EvaluatorTrainer trainer(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  EvaluatorTrainer trainer(config, cache, "actions", testing::tiny_frozen_owo(), reader_for(config), &vectors_, torch::kCPU);
   const auto retrieval = [&] {
     trainer.model()->eval();
     const std::vector<int> clips = cache.clips_in(Split::Train);
     std::vector<std::string> captions;
     for (const int clip : clips) captions.push_back(cache.clips[static_cast<size_t>(clip)].captions[0]);
     const at::Tensor text =
-        evaluator::embed_captions(*trainer.model(), text::PieceModel::load(pieces_path()), &vectors_, captions, "t", torch::kCPU);
+        evaluator::embed_captions(*trainer.model(), reader_for(config), &vectors_, captions, "t", torch::kCPU);
     const at::Tensor motion = evaluator::embed_clips(*trainer.model(), *testing::tiny_frozen_owo()->encoder, nullptr, cache, clips, torch::kCPU);
     trainer.model()->train();
     // Each motion's best caption is its own kind's (6 kinds, 4 clips each).
@@ -214,12 +218,12 @@ TEST_F(EvaluatorTest, AResumedRunTakesTheStepsOfOneThatNeverStoppedAndKeepsTheBe
   config.checkpoint_every = 3;
   config.log_every = 0;
   const testing::TempDir dir;
-  EvaluatorTrainer straight(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  EvaluatorTrainer straight(config, cache, "actions", testing::tiny_frozen_owo(), reader_for(config), &vectors_, torch::kCPU);
   ASSERT_TRUE(straight.has_validation());
   std::vector<double> straight_losses;
   for (int64_t step = 1; step <= 6; ++step) straight_losses.push_back(straight.step(step)[0].second);
 
-  EvaluatorTrainer first(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  EvaluatorTrainer first(config, cache, "actions", testing::tiny_frozen_owo(), reader_for(config), &vectors_, torch::kCPU);
   train::TrainingHooks hooks = first.hooks(dir / "run");
   for (int64_t step = 1; step <= 3; ++step) {
     hooks.step(step);
@@ -229,7 +233,7 @@ TEST_F(EvaluatorTest, AResumedRunTakesTheStepsOfOneThatNeverStoppedAndKeepsTheBe
   ASSERT_TRUE(fs::exists(fs::path(dir / "run") / "best" / "config.json"));
   EXPECT_EQ(first.best_step(), 2);
 
-  EvaluatorTrainer resumed(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  EvaluatorTrainer resumed(config, cache, "actions", testing::tiny_frozen_owo(), reader_for(config), &vectors_, torch::kCPU);
   EXPECT_EQ(resumed.resume(dir / "run"), 3);
   EXPECT_EQ(resumed.best_step(), 2);
   for (int64_t step = 4; step <= 6; ++step) {
@@ -246,7 +250,7 @@ TEST_F(EvaluatorTest, AResumedRunTakesTheStepsOfOneThatNeverStoppedAndKeepsTheBe
 TEST_F(EvaluatorTest, ACheckpointLoadsBackToTheSameEmbeddingsOrFailsWithAHint) {
   const DatasetCache cache = action_cache(false);
   EvaluatorTrainConfig config = small_config();
-  EvaluatorTrainer trainer(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  EvaluatorTrainer trainer(config, cache, "actions", testing::tiny_frozen_owo(), reader_for(config), &vectors_, torch::kCPU);
   trainer.step(1);
   const testing::TempDir dir;
   trainer.save(dir / "eval", 1);
@@ -280,7 +284,7 @@ TEST_F(EvaluatorTest, TheRetrievalIndexIsStoredOnceAndRebuiltForAnotherEvaluator
   const testing::TempDir dir;
   save_cache(action_cache(false), dir / "cache");
   const DatasetCache cache = read_cache(dir / "cache");
-  EvaluatorTrainer trainer(small_config(), cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_,
+  EvaluatorTrainer trainer(small_config(), cache, "actions", testing::tiny_frozen_owo(), reader_for(small_config()), &vectors_,
                            torch::kCPU);
   trainer.step(1);
   trainer.save(dir / "eval", 1);
@@ -322,7 +326,7 @@ TEST_F(EvaluatorTest, RealClipsWrittenAsGeneratedOnesScoreLikeTheRealOnes) {
   // the same jitter, and two identical samples per caption (Multimodality 0).
   const testing::TempDir dir;
   const DatasetCache cache = action_cache(false);
-  EvaluatorTrainer trainer(small_config(), cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_,
+  EvaluatorTrainer trainer(small_config(), cache, "actions", testing::tiny_frozen_owo(), reader_for(small_config()), &vectors_,
                            torch::kCPU);
   trainer.save(dir / "eval", 0);
   evaluator::EvaluatorSession session(evaluator::load_evaluator_checkpoint(dir / "eval"),
@@ -396,7 +400,7 @@ TEST_F(EvaluatorTest, ACaptionLongerThanTheTextEncoderTakesIsRefusedBeforeTraini
   EvaluatorTrainConfig config = small_config();
   config.model.text.max_pieces = 4;
   try {
-    EvaluatorTrainer(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+    EvaluatorTrainer(config, cache, "actions", testing::tiny_frozen_owo(), reader_for(config), &vectors_, torch::kCPU);
     FAIL() << "accepted captions longer than the encoder takes";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("more than model.text.max_pieces = 4 (raise it in the config)"), std::string::npos)
@@ -408,7 +412,7 @@ TEST_F(EvaluatorTest, CaptionSynonymsComeFromTheTrainCaptionsWordsAndTrainingRun
   const DatasetCache cache = action_cache(false);
   EvaluatorTrainConfig config = small_config();
   config.captions.synonym_probability = 1.0;
-  EvaluatorTrainer trainer(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), &vectors_, torch::kCPU);
+  EvaluatorTrainer trainer(config, cache, "actions", testing::tiny_frozen_owo(), reader_for(config), &vectors_, torch::kCPU);
   // The corpus vectors put "hound" next to "dog" and "sprints" next to "runs"; their other words lie at
   // random angles, of which at most one passes min_cosine 0.6 here (a seeded draw).
   EXPECT_EQ(trainer.synonyms().synonyms_of("dog"), (std::vector<std::string>{"hound"}));
@@ -418,7 +422,7 @@ TEST_F(EvaluatorTest, CaptionSynonymsComeFromTheTrainCaptionsWordsAndTrainingRun
   for (int64_t step = 1; step <= 3; ++step) EXPECT_TRUE(std::isfinite(trainer.step(step)[0].second));
 
   config.captions.synonym_probability = 0.5;
-  EXPECT_THROW(EvaluatorTrainer(config, cache, "actions", testing::tiny_frozen_owo(), pieces_path(), nullptr, torch::kCPU),
+  EXPECT_THROW(EvaluatorTrainer(config, cache, "actions", testing::tiny_frozen_owo(), reader_for(config), nullptr, torch::kCPU),
                std::invalid_argument);
   config.captions.synonym_probability = 1.5;
   try {

@@ -1,13 +1,19 @@
-// text/encoder: caption batches (pieces + word channel), the GloVe start of
-// the piece embeddings, padding invariance, and the errors a user sees.
+// text/encoder: caption batches (pieces + word channel, or the sentence
+// encoder's outputs), the GloVe start of the piece embeddings, padding
+// invariance, what a checkpoint keeps of each backbone, and the errors a user sees.
 #include "nec/text/text_encoder.h"
 
 #include "nec/motion/error.h"
+#include "nec/train/checkpoint_io.h"
+#include "nec/train/config_fields.h"
 #include "test_support.h"
 #include "text_support.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <torch/torch.h>
+
+#include <filesystem>
 
 #include <string>
 #include <vector>
@@ -188,6 +194,194 @@ TEST_F(TextEncoderTest, PieceDropoutActsOnlyInTraining) {
   EXPECT_FALSE(outputs[0] == outputs[1] && outputs[1] == outputs[2] && outputs[2] == outputs[3]);
   encoder->eval();
   EXPECT_EQ(encoder->forward(batch).sentence.sum().item<double>(), encoder->forward(batch).sentence.sum().item<double>());
+}
+
+// The use-lite backbone: the frozen sentence encoder under a small trainable head.
+class UseLiteTextEncoderTest : public ::testing::Test {
+ protected:
+  UseLiteTextEncoderTest() {
+    config_.backbone = text::kUseLiteBackbone;
+    config_.word_dim = 0;
+    config_.dim = 32;
+    config_.heads = 2;
+    config_.feedforward = 64;
+    config_.layers = 1;
+    config_.output_dim = 24;
+    config_.max_pieces = 16;
+    reader_ = text::CaptionReader::for_training(config_, "");
+  }
+
+  TextEncoderConfig config_;
+  text::CaptionReader reader_;
+};
+
+TEST_F(UseLiteTextEncoderTest, BatchesHoldTheSentenceEncodersOutputsForTheNormalizedCaptions) {
+  const TextBatch batch = reader_.read({"A Dog trots, 3 times!", "a spider crawls"}, nullptr, "query");
+  const text::SentenceEncoding expected =
+      text::shared_sentence_encoder()->encode({"a dog trots three times", "a spider crawls"});
+  ASSERT_EQ(batch.encoder_features.sizes(), expected.features.sizes());
+  EXPECT_EQ(batch.encoder_features.size(2), text::kUseLiteWidth);
+  EXPECT_TRUE(torch::equal(batch.mask, expected.mask));
+  EXPECT_TRUE(torch::allclose(batch.encoder_features, expected.features));
+  EXPECT_TRUE(torch::allclose(batch.encoder_sentence, expected.sentence));
+  EXPECT_FALSE(batch.ids.defined());
+  EXPECT_EQ(reader_.pieces(), nullptr);
+  EXPECT_EQ(reader_.count_pieces("a spider crawls"), batch.mask[1].sum().item<int64_t>());
+}
+
+TEST_F(UseLiteTextEncoderTest, OutputsHaveTheirShapesAndDoNotDependOnPadding) {
+  torch::manual_seed(3);
+  TextEncoder encoder(config_);
+  encoder->eval();
+  torch::NoGradGuard no_grad;
+  const text::TextEncoding alone = encoder->forward(reader_.read({"a dog walks"}, nullptr, "query"));
+  const text::TextEncoding batched =
+      encoder->forward(reader_.read({"a dog walks", "a spider crawls quickly in a circle"}, nullptr, "query"));
+  ASSERT_EQ(alone.sentence.sizes(), (std::vector<int64_t>{1, 24}));
+  ASSERT_EQ(batched.features.size(2), 32);
+  EXPECT_LT((alone.sentence[0] - batched.sentence[0]).abs().max().item<double>(), 1e-5);
+  EXPECT_GT((batched.sentence[0] - batched.sentence[1]).abs().max().item<double>(), 1e-3);
+  // The module holds only the head: the sentence encoder stays outside, frozen.
+  for (const auto& named : encoder->named_parameters()) {
+    EXPECT_LE(named.value().numel(), int64_t{512} * 32) << named.key();
+  }
+}
+
+TEST_F(UseLiteTextEncoderTest, AHeadOnTheSentenceVectorReadsWordsNoCaptionUsed) {
+  // As the pieces test above, but with no word vectors given: the creature of
+  // each corpus caption (6 classes) from the sentence vector, then captions
+  // whose creature words no training caption used.
+  config_.layers = 0;
+  config_.dim = 128;
+  torch::manual_seed(1);
+  TextEncoder encoder(config_);
+  torch::nn::Linear head(config_.output_dim, 6);
+  std::vector<at::Tensor> parameters = encoder->parameters();
+  for (const at::Tensor& p : head->parameters()) parameters.push_back(p);
+  torch::optim::Adam optimizer(parameters, torch::optim::AdamOptions(3e-3));
+  const std::vector<std::string> captions = testing::caption_corpus();  // creature-major: 30 per creature
+  const TextBatch batch = reader_.read(captions, nullptr, "corpus");
+  const at::Tensor creature = torch::div(torch::arange(static_cast<int64_t>(captions.size())), 30, "floor");
+  for (int step = 0; step < 60; ++step) {
+    optimizer.zero_grad();
+    torch::cross_entropy_loss(head(encoder->forward(batch).sentence), creature).backward();
+    optimizer.step();
+  }
+  encoder->eval();
+  torch::NoGradGuard no_grad;
+  // dog 0, spider 1, snake 2, person 3, bird 4, horse 5
+  const std::vector<std::pair<std::string, int64_t>> queries{{"a puppy walks forward", 0},
+                                                             {"a hound runs quickly", 0},
+                                                             {"the tarantula crawls slowly", 1},
+                                                             {"a serpent turns to the left", 2},
+                                                             {"a woman jumps", 3},
+                                                             {"a man runs forward", 3},
+                                                             {"a sparrow walks", 4},
+                                                             {"a pony trots to the right", 5}};
+  std::vector<std::string> texts;
+  for (const auto& query : queries) texts.push_back(query.first);
+  const at::Tensor predicted = head(encoder->forward(reader_.read(texts, nullptr, "query")).sentence).argmax(1);
+  // Seeds differ in one query or none (e.g. "tarantula" read as a snake): 7 of 8 at least.
+  int right = 0;
+  std::string misses;
+  for (size_t i = 0; i < queries.size(); ++i) {
+    const int64_t got = predicted[static_cast<int64_t>(i)].item<int64_t>();
+    if (got == queries[i].second) {
+      ++right;
+    } else {
+      misses += " '" + queries[i].first + "' read as creature " + std::to_string(got) + ";";
+    }
+  }
+  EXPECT_GE(right, 7) << misses;
+}
+
+TEST_F(UseLiteTextEncoderTest, WithNoLayersTheSentenceVectorIsTheOnlyPieceAndLongCaptionsAreRead) {
+  config_.layers = 0;
+  const text::CaptionReader reader = text::CaptionReader::for_training(config_, "");
+  TextEncoder encoder(config_);
+  encoder->eval();
+  torch::NoGradGuard no_grad;
+  const std::string long_caption = "a dog walks forward then a spider crawls to the left then a snake turns around";
+  const TextBatch batch = reader.read({"a dog walks", long_caption}, nullptr, "query");
+  EXPECT_GT(batch.mask[1].sum().item<int64_t>(), config_.max_pieces);
+  const text::TextEncoding out = encoder->forward(batch);
+  ASSERT_EQ(out.features.sizes(), (std::vector<int64_t>{2, 1, 32}));
+  EXPECT_TRUE(out.mask.all().item<bool>());
+  // The output is a function of the sentence vector alone.
+  TextBatch other = batch;
+  other.encoder_features = torch::zeros_like(batch.encoder_features);
+  EXPECT_TRUE(torch::equal(encoder->forward(other).sentence, out.sentence));
+  EXPECT_GT((out.sentence[0] - out.sentence[1]).abs().max().item<double>(), 1e-3);
+}
+
+TEST_F(UseLiteTextEncoderTest, PieceDropoutZeroesFeaturesOnlyInTraining) {
+  config_.piece_dropout = 0.5;
+  config_.dropout = 0.0;
+  torch::manual_seed(0);
+  TextEncoder encoder(config_);
+  const TextBatch batch = reader_.read({"a dog walks forward"}, nullptr, "query");
+  encoder->train();
+  std::vector<double> outputs;
+  for (int i = 0; i < 4; ++i) outputs.push_back(encoder->forward(batch).sentence.sum().item<double>());
+  EXPECT_FALSE(outputs[0] == outputs[1] && outputs[1] == outputs[2] && outputs[2] == outputs[3]);
+  encoder->eval();
+  EXPECT_EQ(encoder->forward(batch).sentence.sum().item<double>(), encoder->forward(batch).sentence.sum().item<double>());
+}
+
+TEST_F(UseLiteTextEncoderTest, EmptyAndOverlongCaptionsAreRefusedNamingThem) {
+  const auto error_of = [&](const std::vector<std::string>& captions) -> std::string {
+    try {
+      reader_.read(captions, nullptr, "query");
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "(no error)";
+  };
+  EXPECT_EQ(error_of({"a dog walks", ""}), "query (caption 2): the caption is empty");
+  const std::string message = error_of({"a dog walks forward then a spider crawls to the left then a snake turns around"});
+  EXPECT_NE(message.find("pieces, more than the 16 the text encoder takes"), std::string::npos) << message;
+}
+
+TEST_F(UseLiteTextEncoderTest, ConfigsNameTheirBackboneAndOldOnesReadPieces) {
+  TextEncoderConfig bad = config_;
+  bad.word_dim = 100;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = config_;
+  bad.backbone = "glove";
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  nlohmann::json written = {{"text", train::write_config(config_)}};
+  EXPECT_EQ(written["text"]["backbone"], "use-lite");
+  written["text"].erase("backbone");  // a checkpoint from before the field
+  written["text"]["word_dim"] = 100;
+  const TextEncoderConfig old = train::read_config_object<TextEncoderConfig>(written, "text", {"config.json", "", "", true});
+  EXPECT_EQ(old.backbone, text::kPiecesBackbone);
+}
+
+TEST_F(UseLiteTextEncoderTest, ACheckpointKeepsThePieceModelOnlyWhenItReadsPieces) {
+  testing::TempDir dir;
+  const train::JsonFields fields((dir.path() / "config.json").string(), "hint");
+  nlohmann::json root = nlohmann::json::object();
+  text::save_checkpoint_captions(dir.path().string(), reader_, root);
+  EXPECT_FALSE(root.contains("pieces"));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "pieces.model"));
+  const text::CaptionReader loaded = text::load_checkpoint_captions(dir.path().string(), root, config_, fields);
+  EXPECT_EQ(loaded.pieces(), nullptr);
+  EXPECT_TRUE(torch::equal(loaded.read({"a dog"}, nullptr, "q").encoder_sentence,
+                           reader_.read({"a dog"}, nullptr, "q").encoder_sentence));
+
+  const std::string spm = (dir.path() / "corpus.model").string();
+  testing::train_corpus_piece_model(spm);
+  TextEncoderConfig pieces_config;
+  const text::CaptionReader pieces = text::CaptionReader::for_training(pieces_config, spm);
+  testing::TempDir saved;
+  nlohmann::json pieces_root = nlohmann::json::object();
+  text::save_checkpoint_captions(saved.path().string(), pieces, pieces_root);
+  EXPECT_EQ(pieces_root["pieces"], "pieces.model");
+  const text::CaptionReader reloaded = text::load_checkpoint_captions(saved.path().string(), pieces_root, pieces_config, fields);
+  ASSERT_NE(reloaded.pieces(), nullptr);
+  EXPECT_EQ(reloaded.pieces()->vocab_size(), pieces_config.vocab_size);
+  pieces_config.vocab_size += 1;
+  EXPECT_THROW(text::load_checkpoint_captions(saved.path().string(), pieces_root, pieces_config, fields), InputError);
 }
 
 }  // namespace

@@ -20,7 +20,6 @@ using nlohmann::json;
 constexpr const char* kArchitecture = "MotionDenoiser";
 constexpr const char* kConfigFile = "config.json";
 constexpr const char* kTensorFile = "tensors.pt";
-constexpr const char* kPieceFile = "pieces.model";
 constexpr const char* kOwoDir = "owo";
 constexpr const char* kTrainHint = "run `nec train diffusion` to make one";
 
@@ -29,15 +28,14 @@ constexpr const char* kTrainHint = "run `nec train diffusion` to make one";
 const char* to_string(DiffusionStage stage) { return stage == DiffusionStage::kPose ? "pose" : "motion"; }
 
 void save_diffusion_checkpoint(const std::string& dir, MotionDenoiserImpl& model, owo::OwoPretrainerImpl& owo,
-                               const std::string& piece_model_bytes, const DiffusionCheckpointInfo& info,
+                               const text::CaptionReader& captions, const DiffusionCheckpointInfo& info,
                                const std::function<void(const std::string&)>& extra) {
   train::write_checkpoint_directory(dir, "a diffusion checkpoint", [&](const std::string& temp) {
     const fs::path root(temp);
     owo::save_owo_checkpoint((root / kOwoDir).string(), owo, {info.training_step, info.data});
     train::save_module_tensors(model, (root / kTensorFile).string());
-    write_file_atomic((root / kPieceFile).string(), piece_model_bytes);
     if (extra) extra(temp);
-    const json config = {{"format", kDiffusionCheckpointFormat},
+    json config = {{"format", kDiffusionCheckpointFormat},
                          {"version", kDiffusionCheckpointVersion},
                          {"architecture", kArchitecture},
                          {"denoiser", train::write_config(model.config())},
@@ -46,8 +44,8 @@ void save_diffusion_checkpoint(const std::string& dir, MotionDenoiserImpl& model
                          {"training_step", info.training_step},
                          {"data", info.data},
                          {"tensors", kTensorFile},
-                         {"pieces", kPieceFile},
                          {"owo", kOwoDir}};
+    text::save_checkpoint_captions(temp, captions, config);
     write_file_atomic((root / kConfigFile).string(), config.dump(2) + "\n");
   });
 }
@@ -70,7 +68,6 @@ LoadedDiffusion load_diffusion_checkpoint(const std::string& dir) {
   fields.read(root, "training_step", "", loaded.info.training_step);
   fields.read(root, "data", "", loaded.info.data);
   const std::string tensor_file = fields.entry(root, "tensors");
-  const std::string piece_file = fields.entry(root, "pieces");
   const std::string owo_dir = fields.entry(root, "owo");
   try {
     loaded.model = MotionDenoiser(model_config);
@@ -78,8 +75,7 @@ LoadedDiffusion load_diffusion_checkpoint(const std::string& dir) {
     fields.fail(std::string(error.what()) + "; " + fields.hint());
   }
   train::load_module_tensors(*loaded.model, (fs::path(dir) / tensor_file).string(), kTrainHint);
-  loaded.piece_model_path = (fs::path(dir) / piece_file).string();
-  loaded.pieces.emplace(text::load_checkpoint_pieces(loaded.piece_model_path, model_config.text, fields));
+  loaded.captions = text::load_checkpoint_captions(dir, root, model_config.text, fields);
   loaded.owo = owo::load_owo_checkpoint((fs::path(dir) / owo_dir).string()).model;
   if (model_config.joint_identity != JointIdentity::kTree &&
       loaded.owo->encoder->config().dim != model_config.skeleton_dim) {

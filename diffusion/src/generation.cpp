@@ -37,8 +37,8 @@ std::vector<Features> generate_motions(DiffusionSession& session, const Prepared
     captions.push_back(segment.caption);
     frames.push_back(segment.frames);
   }
-  const text::TextBatch text = text::make_text_batch(captions, *session.model.pieces, vectors, model.config().text,
-                                                     segments.size() > 1 ? "the captions" : "the caption");
+  const text::TextBatch text =
+      session.model.captions.read(captions, vectors, segments.size() > 1 ? "the captions" : "the caption");
   const at::Tensor condition = model.caption_condition(text, {});
   at::Tensor joints;
   if (model.config().joint_identity != JointIdentity::kTree) {

@@ -96,15 +96,14 @@ at::Tensor velocity_loss(const at::Tensor& predicted, const at::Tensor& target, 
 
 DiffusionTrainer::DiffusionTrainer(const DiffusionTrainConfig& config, DiffusionStage stage, const DatasetCache& cache,
                                    std::string data_name, owo::OwoPretrainer owo, std::optional<LoadedDiffusion> pose,
-                                   const std::string& piece_model_path, const text::WordVectors* vectors,
+                                   text::CaptionReader captions, const text::WordVectors* vectors,
                                    const c10::Device& device, const train::Communicator* ranks)
     : config_(config),
       stage_(stage),
       cache_(cache),
       data_name_(std::move(data_name)),
       owo_(std::move(owo)),
-      pieces_(text::PieceModel::load(piece_model_path)),
-      piece_model_bytes_(read_file(piece_model_path, size_t{1} << 26)),
+      captions_(std::move(captions)),
       vectors_(vectors),
       device_(device),
       ranks_(ranks),
@@ -115,7 +114,7 @@ DiffusionTrainer::DiffusionTrainer(const DiffusionTrainConfig& config, Diffusion
     config_.model = pose->model->config();
   }
   config_.validate();
-  text::check_corpus_captions(cache_, pieces_, config_.model.text, data_name_);
+  captions_.check_corpus(cache_, data_name_);
   train_ = std::make_unique<BatchLoader>(cache_, Split::Train,
                                          train::training_batches(config_.data, config_.batch_size, config_.seed, ranks_));
   if (train_->clip_count() < config_.batch_size) {
@@ -136,7 +135,7 @@ DiffusionTrainer::DiffusionTrainer(const DiffusionTrainConfig& config, Diffusion
   torch::manual_seed(config_.seed);
   if (stage_ == DiffusionStage::kPose) {
     model_ = MotionDenoiser(config_.model);
-    if (vectors_ != nullptr && config_.model.text.word_dim > 0) model_->text_encoder().init_piece_embeddings(pieces_, *vectors_);
+    if (vectors_ != nullptr && config_.model.text.word_dim > 0) model_->text_encoder().init_piece_embeddings(*captions_.pieces(), *vectors_);
     // Data statistics from train clips spread over the split.
     std::vector<int> clips;
     for (int i = 0; i < static_cast<int>(cache_.clips.size()); ++i) {
@@ -234,7 +233,7 @@ at::Tensor DiffusionTrainer::loss_of(const Batch& batch, bool validation, uint64
     dropped.push_back(drop ? 1 : 0);
   }
   const text::TextBatch text =
-      text::make_text_batch(captions, pieces_, vectors_, config_.model.text, data_name_ + " captions");
+      captions_.read(captions, vectors_, data_name_ + " captions");
   const at::Tensor condition =
       model_->caption_condition(text.to(device_), torch::tensor(dropped, torch::kInt64).to(torch::kBool).to(device_));
   const at::Tensor predicted = model_->forward(x_t, t, condition, skeletons, frame_mask, temporal);
@@ -304,7 +303,7 @@ void DiffusionTrainer::save(const std::string& dir, int64_t step) {
   info.fps = cache_.fps;
   info.training_step = step;
   info.data = data_name_ + " (" + std::to_string(train_->clip_count()) + " train clips)";
-  save_diffusion_checkpoint(dir, *model_, *owo_, piece_model_bytes_, info,
+  save_diffusion_checkpoint(dir, *model_, *owo_, captions_, info,
                             [&](const std::string& temp) { train::write_training_state(temp, state, *optimizer_); });
 }
 
@@ -332,7 +331,6 @@ DiffusionTrainingInputs load_training_inputs(DiffusionStage stage, DiffusionTrai
                                              const std::string& pieces_path, const std::string& pose_dir,
                                              const std::string& glove_path) {
   DiffusionTrainingInputs inputs;
-  inputs.piece_model_path = pieces_path;
   std::optional<LoadedDiffusion> base;
   if (!resume_dir.empty()) {
     base = load_diffusion_checkpoint(resume_dir);
@@ -344,12 +342,12 @@ DiffusionTrainingInputs load_training_inputs(DiffusionStage stage, DiffusionTrai
   }
   if (base) {
     inputs.owo = base->owo;
-    inputs.piece_model_path = base->piece_model_path;  // read before the first save replaces the directory
+    inputs.captions = base->captions;  // read before the first save replaces the directory
     if (stage == DiffusionStage::kPose) config.model = base->model->config();
   } else {
     inputs.owo = owo::load_owo_checkpoint(owo_dir).model;
     config.model.skeleton_dim = inputs.owo->encoder->config().dim;
-    config.model.text.vocab_size = text::PieceModel::load(pieces_path).vocab_size();
+    inputs.captions = text::CaptionReader::for_training(config.model.text, pieces_path);
   }
   const int64_t name_dim = inputs.owo->encoder->config().name_dim;
   const int64_t word_dim = base ? base->model->config().text.word_dim : config.model.text.word_dim;

@@ -26,7 +26,6 @@ using nlohmann::json;
 constexpr const char* kArchitecture = "Evaluator";
 constexpr const char* kConfigFile = "config.json";
 constexpr const char* kTensorFile = "tensors.pt";
-constexpr const char* kPieceFile = "pieces.model";
 constexpr const char* kOwoDir = "owo";
 constexpr const char* kTrainHint = "run `nec train evaluator` to make one";
 constexpr int64_t kEmbedBatch = 32;  // clips or captions per forward pass when embedding
@@ -72,15 +71,14 @@ at::Tensor EvaluatorImpl::embed_text(const text::TextBatch& batch) {
 at::Tensor EvaluatorImpl::logit_scale() const { return log_scale_.exp().clamp_max(100.0); }
 
 void save_evaluator_checkpoint(const std::string& dir, EvaluatorImpl& model, owo::OwoPretrainerImpl& owo,
-                               const std::string& piece_model_bytes, const EvaluatorCheckpointInfo& info,
+                               const text::CaptionReader& captions, const EvaluatorCheckpointInfo& info,
                                const std::function<void(const std::string&)>& extra) {
   train::write_checkpoint_directory(dir, "an evaluator checkpoint", [&](const std::string& temp) {
     const fs::path root(temp);
     owo::save_owo_checkpoint((root / kOwoDir).string(), owo, {info.training_step, info.data});
     train::save_module_tensors(model, (root / kTensorFile).string());
-    write_file_atomic((root / kPieceFile).string(), piece_model_bytes);
     if (extra) extra(temp);
-    const json config = {{"format", kEvaluatorCheckpointFormat},
+    json config = {{"format", kEvaluatorCheckpointFormat},
                          {"version", kEvaluatorCheckpointVersion},
                          {"architecture", kArchitecture},
                          {"evaluator", train::write_config(model.config())},
@@ -91,8 +89,8 @@ void save_evaluator_checkpoint(const std::string& dir, EvaluatorImpl& model, owo
                          {"best_r_precision", info.best_r_precision},
                          {"data", info.data},
                          {"tensors", kTensorFile},
-                         {"pieces", kPieceFile},
                          {"owo", kOwoDir}};
+    text::save_checkpoint_captions(temp, captions, config);
     write_file_atomic((root / kConfigFile).string(), config.dump(2) + "\n");
   });
 }
@@ -115,7 +113,6 @@ LoadedEvaluator load_evaluator_checkpoint(const std::string& dir) {
   fields.read(root, "best_r_precision", "", loaded.info.best_r_precision);
   fields.read(root, "data", "", loaded.info.data);
   const std::string tensor_file = fields.entry(root, "tensors");
-  const std::string piece_file = fields.entry(root, "pieces");
   const std::string owo_dir = fields.entry(root, "owo");
   try {
     model_config.validate();
@@ -124,8 +121,7 @@ LoadedEvaluator load_evaluator_checkpoint(const std::string& dir) {
     fields.fail(std::string(error.what()) + "; " + fields.hint());
   }
   train::load_module_tensors(*loaded.model, (fs::path(dir) / tensor_file).string(), kTrainHint);
-  loaded.piece_model_path = (fs::path(dir) / piece_file).string();
-  loaded.pieces.emplace(text::load_checkpoint_pieces(loaded.piece_model_path, model_config.text, fields));
+  loaded.captions = text::load_checkpoint_captions(dir, root, model_config.text, fields);
   loaded.owo = owo::load_owo_checkpoint((fs::path(dir) / owo_dir).string()).model;
   if (loaded.owo->encoder->config().dim != model_config.motion.joint_embedding_dim) {
     fields.fail("motion.joint_embedding_dim is " + std::to_string(model_config.motion.joint_embedding_dim) +
@@ -144,7 +140,7 @@ EvaluatorSession::EvaluatorSession(LoadedEvaluator loaded, std::optional<text::W
   loaded_.owo->to(device_);
 }
 
-at::Tensor embed_captions(EvaluatorImpl& model, const text::PieceModel& pieces, const text::WordVectors* vectors,
+at::Tensor embed_captions(EvaluatorImpl& model, const text::CaptionReader& reader, const text::WordVectors* vectors,
                           const std::vector<std::string>& captions, const std::string& where, const c10::Device& device) {
   c10::InferenceMode inference;
   std::vector<at::Tensor> parts;
@@ -152,7 +148,7 @@ at::Tensor embed_captions(EvaluatorImpl& model, const text::PieceModel& pieces, 
     const std::vector<std::string> part(
         captions.begin() + static_cast<std::ptrdiff_t>(begin),
         captions.begin() + static_cast<std::ptrdiff_t>(std::min(captions.size(), begin + kEmbedBatch)));
-    const text::TextBatch batch = text::make_text_batch(part, pieces, vectors, model.config().text, where);
+    const text::TextBatch batch = reader.read(part, vectors, where);
     parts.push_back(model.embed_text(batch.to(device)).cpu());
   }
   return parts.empty() ? torch::zeros({0, model.config().text.output_dim}) : torch::cat(parts);
@@ -169,7 +165,7 @@ Embeddings to_embeddings(const at::Tensor& embeddings) {
 }
 
 at::Tensor EvaluatorSession::embed_captions(const std::vector<std::string>& captions, const std::string& where) {
-  return evaluator::embed_captions(*loaded_.model, *loaded_.pieces, vectors_ ? &*vectors_ : nullptr, captions, where,
+  return evaluator::embed_captions(*loaded_.model, loaded_.captions, vectors_ ? &*vectors_ : nullptr, captions, where,
                                    device_);
 }
 

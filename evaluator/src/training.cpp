@@ -100,15 +100,14 @@ std::vector<int> captioned_clips(const DatasetCache& cache, Split split) {
 }
 
 EvaluatorTrainer::EvaluatorTrainer(const EvaluatorTrainConfig& config, const DatasetCache& cache, std::string data_name,
-                                   owo::OwoPretrainer owo, const std::string& piece_model_path,
+                                   owo::OwoPretrainer owo, text::CaptionReader captions,
                                    const text::WordVectors* vectors, const c10::Device& device,
                                    const train::Communicator* ranks)
     : config_(config),
       cache_(cache),
       data_name_(std::move(data_name)),
       owo_(std::move(owo)),
-      pieces_(text::PieceModel::load(piece_model_path)),
-      piece_model_bytes_(read_file(piece_model_path, size_t{1} << 26)),
+      captions_(std::move(captions)),
       vectors_(vectors),
       device_(device),
       ranks_(ranks),
@@ -116,7 +115,9 @@ EvaluatorTrainer::EvaluatorTrainer(const EvaluatorTrainConfig& config, const Dat
   config_.validate();
   torch::manual_seed(config_.seed);
   model_ = Evaluator(config_.model);
-  if (vectors_ != nullptr && config_.model.text.word_dim > 0) model_->text->init_piece_embeddings(pieces_, *vectors_);
+  if (vectors_ != nullptr && config_.model.text.word_dim > 0) {
+    model_->text->init_piece_embeddings(*captions_.pieces(), *vectors_);
+  }
   model_->to(device_);
   model_->train();
   owo_->to(device_);
@@ -125,7 +126,7 @@ EvaluatorTrainer::EvaluatorTrainer(const EvaluatorTrainConfig& config, const Dat
   optimizer_ = train::make_adamw(model_->parameters(), config_.optimizer);
 
   const std::vector<int> train_clips = captioned_clips(cache, Split::Train);
-  text::check_corpus_captions(cache, pieces_, config_.model.text, data_name_);
+  captions_.check_corpus(cache, data_name_);
   if (static_cast<int64_t>(train_clips.size()) < config_.batch_size) {
     throw InputError(data_name_, 0,
                      "the train split has " + std::to_string(train_clips.size()) +
@@ -176,8 +177,7 @@ train::LossTerms EvaluatorTrainer::step(int64_t step) {
     const tat::BatchTensors x = tat::to_tensors(batch).to(device_);
     const at::Tensor joints = tat::embed_skeletons(*owo_->encoder, batch.skeletons, batch.canonical_names, vectors_).clone();
     const text::TextBatch captions =
-        text::make_text_batch(rewritten_captions(batch.captions, step), pieces_, vectors_, config_.model.text,
-                              data_name_ + " captions");
+        captions_.read(rewritten_captions(batch.captions, step), vectors_, data_name_ + " captions");
     // Items whose normalized captions are equal match each other: compare caption ids, not strings, B^2 times.
     std::map<std::string, int64_t> caption_ids;
     std::vector<int64_t> ids;
@@ -210,7 +210,7 @@ std::vector<std::string> EvaluatorTrainer::rewritten_captions(const std::vector<
   for (const std::string& caption : captions) {
     std::string rewritten = synonyms_.rewrite(text::normalize_caption(caption), probability, random);
     // A synonym cut into more pieces can make a caption longer than the encoder reads: keep the caption then.
-    const bool fits = static_cast<int64_t>(pieces_.split(rewritten).ids.size()) <= config_.model.text.max_pieces;
+    const bool fits = captions_.count_pieces(rewritten) <= config_.model.text.max_pieces;
     out.push_back(fits ? std::move(rewritten) : caption);
   }
   return out;
@@ -222,7 +222,7 @@ std::optional<train::LossTerms> EvaluatorTrainer::validate() {
   std::vector<std::string> captions;
   for (const int clip : validation_clips_) captions.push_back(cache_.clips[static_cast<size_t>(clip)].captions.front());
   const Embeddings text =
-      to_embeddings(embed_captions(*model_, pieces_, vectors_, captions, data_name_ + " val captions", device_));
+      to_embeddings(embed_captions(*model_, captions_, vectors_, captions, data_name_ + " val captions", device_));
   const Embeddings motion =
       to_embeddings(embed_clips(*model_, *owo_->encoder, vectors_, cache_, validation_clips_, device_));
   model_->train();
@@ -277,12 +277,12 @@ void EvaluatorTrainer::save(const std::string& dir, int64_t step) {
   state.schedule = schedule_.to_json();
   state.data = train::batch_position(*train_);
   const fs::path kept = fs::path(dir) / kBestCheckpointDir;
-  save_evaluator_checkpoint(dir, *model_, *owo_, piece_model_bytes_, info(step), [&](const std::string& temp) {
+  save_evaluator_checkpoint(dir, *model_, *owo_, captions_, info(step), [&](const std::string& temp) {
     train::write_training_state(temp, state, *optimizer_);
     const fs::path best = fs::path(temp) / kBestCheckpointDir;
     if (best_pending_) {
       EvaluatorCheckpointInfo best_info = info(info_.best_step);
-      save_evaluator_checkpoint(best.string(), *best_model_, *owo_, piece_model_bytes_, best_info);
+      save_evaluator_checkpoint(best.string(), *best_model_, *owo_, captions_, best_info);
     } else if (fs::exists(kept / "config.json")) {
       fs::copy(kept, best, fs::copy_options::recursive);
     }

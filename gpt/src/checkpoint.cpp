@@ -22,16 +22,15 @@ constexpr const char* kTrainHint = "run `nec train gpt` to make one";
 
 }  // namespace
 
-void save_gpt_checkpoint(const std::string& dir, TokenGptImpl& model, const std::string& piece_model_bytes,
+void save_gpt_checkpoint(const std::string& dir, TokenGptImpl& model, const text::CaptionReader& captions,
                          tat::LoadedTatCheckpoint& tokenizer, const GptCheckpointInfo& info,
                          const std::function<void(const std::string&)>& extra) {
   train::write_checkpoint_directory(dir, "a GPT checkpoint", [&](const std::string& temp) {
     const fs::path root(temp);
     tat::save_tat_checkpoint((root / "tat").string(), *tokenizer.tokenizer, *tokenizer.owo, tokenizer.info);
     train::save_module_tensors(model, (root / "tensors.pt").string());
-    write_file_atomic((root / "pieces.model").string(), piece_model_bytes);
     if (extra) extra(temp);
-    const json config = {{"format", kGptCheckpointFormat},
+    json config = {{"format", kGptCheckpointFormat},
                          {"version", kGptCheckpointVersion},
                          {"architecture", kArchitecture},
                          {"gpt", train::write_config(model.config())},
@@ -40,8 +39,8 @@ void save_gpt_checkpoint(const std::string& dir, TokenGptImpl& model, const std:
                          {"training_step", info.training_step},
                          {"data", info.data},
                          {"tensors", "tensors.pt"},
-                         {"pieces", "pieces.model"},
                          {"tat", "tat"}};
+    text::save_checkpoint_captions(temp, captions, config);
     write_file_atomic((root / "config.json").string(), config.dump(2) + "\n");
   });
 }
@@ -62,7 +61,6 @@ LoadedGpt load_gpt_checkpoint(const std::string& dir) {
   int64_t downsampling = 0;
   fields.read(root, "downsampling", "", downsampling);
   const std::string tensor_file = fields.entry(root, "tensors");
-  const std::string piece_file = fields.entry(root, "pieces");
   loaded.tat_dir = (fs::path(dir) / fields.entry(root, "tat")).string();
   try {
     loaded.model = TokenGpt(model_config);
@@ -70,8 +68,7 @@ LoadedGpt load_gpt_checkpoint(const std::string& dir) {
     fields.fail(std::string(error.what()) + "; " + fields.hint());
   }
   train::load_module_tensors(*loaded.model, (fs::path(dir) / tensor_file).string(), kTrainHint);
-  loaded.piece_model_path = (fs::path(dir) / piece_file).string();
-  loaded.pieces.emplace(text::load_checkpoint_pieces(loaded.piece_model_path, model_config.text, fields));
+  loaded.captions = text::load_checkpoint_captions(dir, root, model_config.text, fields);
   // The tokenizer inside must be the one whose codes the GPT predicts.
   const train::CheckpointConfig tat_config = train::read_checkpoint_config(
       loaded.tat_dir, tat::kTatCheckpointFormat, tat::kTatCheckpointVersion, "the GPT's tokenizer", kTrainHint);

@@ -54,9 +54,8 @@ std::vector<at::Tensor> generate_codes(GeneratorSession& session, const Prepared
   for (size_t s = 0; s < segments.size(); ++s) {
     const Segment& segment = segments[s];
     const text::TextBatch caption =
-        text::make_text_batch({segment.caption}, *session.gpt.pieces,
-                              session.caption_vectors ? &*session.caption_vectors : nullptr, config.text,
-                              segments.size() > 1 ? "caption " + std::to_string(s + 1) : "the caption");
+        session.gpt.captions.read({segment.caption}, session.caption_vectors ? &*session.caption_vectors : nullptr,
+                                  segments.size() > 1 ? "caption " + std::to_string(s + 1) : "the caption");
     const GptCondition condition = gpt.condition(caption, skeleton, {});
     const GptCondition unconditioned = gpt.unconditioned(skeleton);
     SequenceLength length;

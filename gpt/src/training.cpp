@@ -86,14 +86,13 @@ GptLoss gpt_loss(const GptLogits& logits, const at::Tensor& targets, int64_t glo
 
 GptTrainer::GptTrainer(const GptTrainConfig& config, const DatasetCache& cache, std::string data_name,
                        tat::TokenizerSession& tokenizer, const std::string& tokenizer_dir,
-                       const std::string& piece_model_path, const text::WordVectors* vectors,
+                       text::CaptionReader captions, const text::WordVectors* vectors,
                        const c10::Device& device, const train::Communicator* ranks)
     : config_(config),
       cache_(cache),
       data_name_(std::move(data_name)),
       tokenizer_(tokenizer),
-      pieces_(text::PieceModel::load(piece_model_path)),
-      piece_model_bytes_(read_file(piece_model_path, size_t{1} << 26)),
+      captions_(std::move(captions)),
       vectors_(vectors),
       device_(device),
       ranks_(ranks),
@@ -128,12 +127,12 @@ GptTrainer::GptTrainer(const GptTrainConfig& config, const DatasetCache& cache, 
     if (clip.split == Split::Val) validation_rows_.push_back(row);
   }
   if (train_rows_.empty()) throw InputError(data_name_, 0, "the train split has no clip with a caption");
-  text::check_corpus_captions(cache_, pieces_, config_.model.text, data_name_);
+  captions_.check_corpus(cache_, data_name_);
 
   torch::manual_seed(config_.seed);
   model_ = TokenGpt(config_.model);
   if (vectors_ != nullptr && config_.model.text.word_dim > 0) {
-    model_->text_encoder().init_piece_embeddings(pieces_, *vectors_);
+    model_->text_encoder().init_piece_embeddings(*captions_.pieces(), *vectors_);
   }
   model_->to(device_);
   model_->train();
@@ -213,7 +212,7 @@ GptBatch GptTrainer::batch(int64_t step, bool whole) const {
 
 GptLoss GptTrainer::loss_of(const GptBatch& batch, int64_t global_items) {
   const text::TextBatch captions =
-      text::make_text_batch(batch.captions, pieces_, vectors_, config_.model.text, data_name_ + " captions");
+      captions_.read(batch.captions, vectors_, data_name_ + " captions");
   const GptCondition condition =
       model_->condition(captions.to(device_), batch.skeleton_features.to(device_), batch.drop_text.to(device_));
   at::Tensor inputs = batch.inputs.to(device_);
@@ -299,7 +298,7 @@ void GptTrainer::save(const std::string& dir, int64_t step) {
   info.fps = cache_.fps;
   info.training_step = step;
   info.data = data_name_ + " (" + std::to_string(train_rows_.size()) + " captioned train clips)";
-  save_gpt_checkpoint(dir, *model_, piece_model_bytes_, tokenizer_.model, info,
+  save_gpt_checkpoint(dir, *model_, captions_, tokenizer_.model, info,
                       [&](const std::string& temp) { train::write_training_state(temp, state, *optimizer_); });
 }
 

@@ -1,14 +1,18 @@
-// The text encoder: pieces + word vectors -> transformer -> sentence vector.
+// The text encoder: a backbone's reading of the caption -> transformer -> sentence vector.
 #include "nec/text/text_encoder.h"
 
 #include "nec/layers/transformer.h"
 #include "nec/motion/error.h"
+#include "nec/motion/files.h"
 #include "nec/text/caption_text.h"
 #include "nec/train/checkpoint_io.h"
 #include "nec/train/config_fields.h"
 
+#include <nlohmann/json.hpp>
 #include <torch/torch.h>
 
+#include <filesystem>
+#include <mutex>
 #include <stdexcept>
 
 namespace nec::text {
@@ -21,23 +25,51 @@ void require(bool ok, const std::string& message) {
 
 int64_t piece_width(const TextEncoderConfig& c) { return c.word_dim > 0 ? c.word_dim : c.dim; }
 
+bool reads_pieces(const TextEncoderConfig& c) { return c.backbone == kPiecesBackbone; }
+// Whether the transformer reads a token per piece (max_pieces bounds the caption), or only the sentence vector.
+bool reads_each_piece(const TextEncoderConfig& c) { return reads_pieces(c) || c.layers > 0; }
+
+constexpr const char* kPieceFile = "pieces.model";
+
+// InputError for a caption of more than config.max_pieces pieces.
+void check_piece_count(int64_t count, const TextEncoderConfig& config, const std::string& where,
+                       const std::string& caption) {
+  if (reads_each_piece(config) && count > config.max_pieces) {
+    throw InputError(where, 0,
+                     "the caption has " + std::to_string(count) + " pieces, more than the " +
+                         std::to_string(config.max_pieces) + " the text encoder takes: '" + caption + "'");
+  }
+}
+
+// `where`, with the caption's position when there are several.
+std::string caption_name(const std::string& where, size_t index, size_t count) {
+  return count > 1 ? where + " (caption " + std::to_string(index + 1) + ")" : where;
+}
+
 }  // namespace
 
 void TextEncoderConfig::validate() const {
+  require(backbone == kPiecesBackbone || backbone == kUseLiteBackbone,
+          "backbone '" + backbone + "' is neither '" + kPiecesBackbone + "' nor '" + kUseLiteBackbone + "'");
+  require(reads_pieces(*this) || word_dim == 0, "word_dim must be 0 with the use-lite backbone (it reads no word vectors)");
   require(vocab_size >= 3, "vocab_size must be >= 3 (pad, unknown and a piece)");
   require(word_dim >= 0, "word_dim must be >= 0");
   require(dim >= 1 && heads >= 1 && dim % heads == 0, "heads must divide dim");
-  require(layers >= 1 && feedforward >= 1 && output_dim >= 1, "layers, feedforward and output_dim must be >= 1");
+  require(layers >= (reads_pieces(*this) ? 1 : 0), "layers must be >= 1 (>= 0 with the use-lite backbone)");
+  require(feedforward >= 1 && output_dim >= 1, "feedforward and output_dim must be >= 1");
   require(max_pieces >= 1, "max_pieces must be >= 1");
   require(dropout >= 0 && dropout < 1, "dropout must be in [0, 1)");
   require(piece_dropout >= 0 && piece_dropout < 1, "piece_dropout must be in [0, 1)");
 }
 
 void visit_fields(train::ConfigVisitor& v, TextEncoderConfig& c) {
+  v.added_field("backbone", c.backbone,
+                "what reads the caption: \"use-lite\" (the pretrained sentence encoder, frozen) or \"pieces\" "
+                "(the piece model and word vectors, trained with the model)");
   v.field("vocab_size", c.vocab_size, "pieces of the piece model (set from --pieces)");
   v.field("word_dim", c.word_dim, "width of the word vectors (set from --glove); 0 = no word channel");
   v.field("dim", c.dim, "token width");
-  v.field("layers", c.layers, "transformer layers");
+  v.field("layers", c.layers, "transformer layers (use-lite: 0 reads the sentence vector alone)");
   v.field("heads", c.heads, "attention heads; must divide dim");
   v.field("feedforward", c.feedforward, "FFN hidden width");
   v.field("max_pieces", c.max_pieces, "longest caption in pieces; longer ones are refused");
@@ -49,34 +81,10 @@ void visit_fields(train::ConfigVisitor& v, TextEncoderConfig& c) {
           "a word with a vector that the piece model cuts into several pieces is read from its vector alone");
 }
 
-PieceModel load_checkpoint_pieces(const std::string& path, const TextEncoderConfig& config,
-                                  const train::JsonFields& fields) {
-  PieceModel pieces = PieceModel::load(path);
-  if (pieces.vocab_size() != config.vocab_size) {
-    fields.fail("the piece model has " + std::to_string(pieces.vocab_size()) + " pieces, the text encoder " +
-                std::to_string(config.vocab_size) + "; " + fields.hint());
-  }
-  return pieces;
-}
-
 TextBatch TextBatch::to(const c10::Device& device) const {
-  return {ids.to(device), word_vectors.to(device), word_known.to(device), mask.to(device)};
-}
-
-void check_corpus_captions(const DatasetCache& cache, const PieceModel& pieces, const TextEncoderConfig& config,
-                           const std::string& data_name) {
-  for (const CacheClip& clip : cache.clips) {
-    if (clip.split == Split::Test) continue;
-    for (const std::string& caption : clip.captions) {
-      const size_t count = pieces.split(checked_caption(caption, data_name + ": clip " + clip.id)).ids.size();
-      if (static_cast<int64_t>(count) > config.max_pieces) {
-        throw InputError(data_name, 0, "clip " + clip.id + " has a caption of " + std::to_string(count) +
-                                           " pieces, more than model.text.max_pieces = " +
-                                           std::to_string(config.max_pieces) + " (raise it in the config): '" +
-                                           caption + "'");
-      }
-    }
-  }
+  const auto moved = [&](const at::Tensor& t) { return t.defined() ? t.to(device) : t; };
+  return {moved(ids), moved(word_vectors), moved(word_known), moved(encoder_features), moved(encoder_sentence),
+          moved(mask)};
 }
 
 TextBatch make_text_batch(const std::vector<std::string>& captions, const PieceModel& pieces,
@@ -90,14 +98,10 @@ TextBatch make_text_batch(const std::vector<std::string>& captions, const PieceM
   split.reserve(captions.size());
   int64_t longest = 1;
   for (size_t i = 0; i < captions.size(); ++i) {
-    const std::string name = captions.size() > 1 ? where + " (caption " + std::to_string(i + 1) + ")" : where;
+    const std::string name = caption_name(where, i, captions.size());
     split.push_back(pieces.split(checked_caption(captions[i], name)));
     const int64_t count = static_cast<int64_t>(split.back().ids.size());
-    if (count > config.max_pieces) {
-      throw InputError(name, 0,
-                       "the caption has " + std::to_string(count) + " pieces, more than the " +
-                           std::to_string(config.max_pieces) + " the text encoder takes: '" + captions[i] + "'");
-    }
+    check_piece_count(count, config, name, captions[i]);
     longest = std::max(longest, count);
   }
   const int64_t b = static_cast<int64_t>(captions.size()), width = config.word_dim;
@@ -131,17 +135,125 @@ TextBatch make_text_batch(const std::vector<std::string>& captions, const PieceM
   return batch;
 }
 
+TextBatch make_sentence_batch(const std::vector<std::string>& captions, const SentenceEncoderImpl& encoder,
+                              const TextEncoderConfig& config, const std::string& where) {
+  if (encoder.dim() != kUseLiteWidth) {
+    throw std::invalid_argument("make_sentence_batch: the sentence encoder is " + std::to_string(encoder.dim()) +
+                                " wide, the text encoder reads " + std::to_string(kUseLiteWidth));
+  }
+  std::vector<std::string> normalized;
+  normalized.reserve(captions.size());
+  for (size_t i = 0; i < captions.size(); ++i) {
+    const std::string name = caption_name(where, i, captions.size());
+    normalized.push_back(checked_caption(captions[i], name));
+    check_piece_count(static_cast<int64_t>(encoder.pieces().encode(normalized.back()).size()), config, name, captions[i]);
+  }
+  const SentenceEncoding encoded = encoder.encode(normalized);
+  TextBatch batch;
+  batch.encoder_features = encoded.features;
+  batch.encoder_sentence = encoded.sentence;
+  batch.mask = encoded.mask;
+  return batch;
+}
+
+SentenceEncoder shared_sentence_encoder() {
+  static std::mutex mutex;
+  static SentenceEncoder shared{nullptr};
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (shared.is_empty()) shared = SentenceEncoder(default_sentence_encoder_dir());
+  return shared;
+}
+
+CaptionReader CaptionReader::for_training(TextEncoderConfig& config, const std::string& piece_model_path) {
+  CaptionReader reader;
+  if (reads_pieces(config)) {
+    if (piece_model_path.empty()) {
+      throw InputError("the text encoder reads pieces: give the piece model (`nec text train-tokenizer` makes one), "
+                       "or set model.text.backbone to \"use-lite\"");
+    }
+    reader.pieces_ = std::make_shared<const PieceModel>(PieceModel::load(piece_model_path));
+    reader.piece_model_path_ = piece_model_path;
+    reader.piece_model_bytes_ = read_file(piece_model_path, size_t{1} << 26);
+    config.vocab_size = reader.pieces_->vocab_size();
+  } else {
+    reader.sentence_encoder_ = shared_sentence_encoder();
+  }
+  reader.config_ = config;
+  return reader;
+}
+
+int64_t CaptionReader::count_pieces(const std::string& caption) const {
+  return pieces_ ? static_cast<int64_t>(pieces_->split(caption).ids.size())
+                 : static_cast<int64_t>(sentence_encoder_->pieces().encode(caption).size());
+}
+
+TextBatch CaptionReader::read(const std::vector<std::string>& captions, const WordVectors* vectors,
+                              const std::string& where) const {
+  if (pieces_) return make_text_batch(captions, *pieces_, vectors, config_, where);
+  if (sentence_encoder_.is_empty()) throw std::logic_error("CaptionReader::read on a reader that reads nothing");
+  return make_sentence_batch(captions, *sentence_encoder_, config_, where);
+}
+
+void CaptionReader::check_corpus(const DatasetCache& cache, const std::string& data_name) const {
+  for (const CacheClip& clip : cache.clips) {
+    if (clip.split == Split::Test) continue;
+    for (const std::string& caption : clip.captions) {
+      const int64_t count = count_pieces(checked_caption(caption, data_name + ": clip " + clip.id));
+      if (reads_each_piece(config_) && count > config_.max_pieces) {
+        throw InputError(data_name, 0, "clip " + clip.id + " has a caption of " + std::to_string(count) +
+                                           " pieces, more than model.text.max_pieces = " +
+                                           std::to_string(config_.max_pieces) + " (raise it in the config): '" +
+                                           caption + "'");
+      }
+    }
+  }
+}
+
+void save_checkpoint_captions(const std::string& dir, const CaptionReader& captions, nlohmann::json& config) {
+  if (captions.pieces() == nullptr) return;
+  write_file_atomic((std::filesystem::path(dir) / kPieceFile).string(), captions.piece_model_bytes());
+  config["pieces"] = kPieceFile;
+}
+
+CaptionReader load_checkpoint_captions(const std::string& dir, const nlohmann::json& root,
+                                       const TextEncoderConfig& config, const train::JsonFields& fields) {
+  CaptionReader reader;
+  reader.config_ = config;
+  if (!reads_pieces(config)) {
+    reader.sentence_encoder_ = shared_sentence_encoder();
+    return reader;
+  }
+  reader.piece_model_path_ = (std::filesystem::path(dir) / fields.entry(root, "pieces")).string();
+  reader.pieces_ = std::make_shared<const PieceModel>(PieceModel::load(reader.piece_model_path_));
+  if (reader.pieces_->vocab_size() != config.vocab_size) {
+    fields.fail("the piece model has " + std::to_string(reader.pieces_->vocab_size()) + " pieces, the text encoder " +
+                std::to_string(config.vocab_size) + "; " + fields.hint());
+  }
+  reader.piece_model_bytes_ = read_file(reader.piece_model_path_, size_t{1} << 26);
+  return reader;
+}
+
 TextEncoderImpl::TextEncoderImpl(const TextEncoderConfig& config) : config_(config) {
   config_.validate();
-  piece_embedding_ = register_module("piece_embedding", torch::nn::Embedding(config_.vocab_size, piece_width(config_)));
-  input_ = register_module("input", torch::nn::Linear(piece_width(config_) + config_.word_dim + 1, config_.dim));
-  positions_ = register_parameter("positions", torch::randn({config_.max_pieces, config_.dim}) * 0.02);
-  const layers::TransformerOptions layer{config_.dim, config_.heads, config_.feedforward, config_.dropout};
-  transformer_ = register_module("transformer", std::make_shared<layers::TransformerStackImpl>(layer, config_.layers));
+  if (reads_pieces(config_)) {
+    piece_embedding_ = register_module("piece_embedding", torch::nn::Embedding(config_.vocab_size, piece_width(config_)));
+    input_ = register_module("input", torch::nn::Linear(piece_width(config_) + config_.word_dim + 1, config_.dim));
+  } else {
+    input_ = register_module("input", torch::nn::Linear(kUseLiteWidth, config_.dim));
+    if (config_.layers > 0) {
+      encoder_sentence_ = register_module("encoder_sentence", torch::nn::Linear(kUseLiteWidth, config_.output_dim));
+    }
+  }
+  if (config_.layers > 0) {
+    positions_ = register_parameter("positions", torch::randn({config_.max_pieces, config_.dim}) * 0.02);
+    const layers::TransformerOptions layer{config_.dim, config_.heads, config_.feedforward, config_.dropout};
+    transformer_ = register_module("transformer", std::make_shared<layers::TransformerStackImpl>(layer, config_.layers));
+  }
   sentence_ = register_module("sentence", torch::nn::Linear(config_.dim, config_.output_dim));
 }
 
 int64_t TextEncoderImpl::init_piece_embeddings(const PieceModel& pieces, const WordVectors& vectors) {
+  if (!reads_pieces(config_)) throw std::invalid_argument("init_piece_embeddings: the encoder reads no pieces");
   if (config_.word_dim != vectors.dim()) {
     throw std::invalid_argument("init_piece_embeddings: word vectors of width " + std::to_string(vectors.dim()) +
                                 ", the encoder reads " + std::to_string(config_.word_dim));
@@ -160,25 +272,47 @@ int64_t TextEncoderImpl::init_piece_embeddings(const PieceModel& pieces, const W
   return initialised;
 }
 
-TextEncoding TextEncoderImpl::forward(const TextBatch& batch) {
-  const int64_t pieces = batch.ids.size(1);
-  if (pieces > config_.max_pieces) {
-    throw std::invalid_argument("TextEncoder: " + std::to_string(pieces) + " pieces, at most " +
-                                std::to_string(config_.max_pieces));
+at::Tensor TextEncoderImpl::input_tokens(const TextBatch& batch) {
+  const bool dropping = is_training() && config_.piece_dropout > 0;
+  if (!reads_pieces(config_)) {
+    at::Tensor features = batch.encoder_features;
+    if (dropping) {
+      const at::Tensor kept = torch::rand({features.size(0), features.size(1), 1}, features.options()) >= config_.piece_dropout;
+      features = features * kept.to(features.scalar_type());
+    }
+    return input_(features);
   }
   at::Tensor ids = batch.ids;
-  if (is_training() && config_.piece_dropout > 0) {
+  if (dropping) {
     const at::Tensor dropped = torch::rand(ids.sizes(), torch::TensorOptions().device(ids.device())) < config_.piece_dropout;
     ids = torch::where(dropped.logical_and(batch.mask), torch::full_like(ids, kUnknownPiece), ids);
   }
   std::vector<at::Tensor> channels{piece_embedding_(ids)};
   if (config_.word_dim > 0) channels.push_back(batch.word_vectors);
   channels.push_back(batch.word_known);
-  const at::Tensor tokens = input_(torch::cat(channels, -1)) + positions_.narrow(0, 0, pieces).unsqueeze(0);
+  return input_(torch::cat(channels, -1));
+}
+
+TextEncoding TextEncoderImpl::forward(const TextBatch& batch) {
   TextEncoding out;
+  if (!reads_each_piece(config_)) {  // use-lite with no layers: the sentence vector through one hidden layer
+    const at::Tensor hidden =
+        torch::gelu(input_(torch::dropout(batch.encoder_sentence, config_.dropout, is_training())));
+    out.features = hidden.unsqueeze(1);
+    out.mask = torch::ones({hidden.size(0), 1}, hidden.options().dtype(torch::kBool));
+    out.sentence = sentence_(hidden);
+    return out;
+  }
+  const int64_t pieces = batch.mask.size(1);
+  if (pieces > config_.max_pieces) {
+    throw std::invalid_argument("TextEncoder: " + std::to_string(pieces) + " pieces, at most " +
+                                std::to_string(config_.max_pieces));
+  }
+  const at::Tensor tokens = input_tokens(batch) + positions_.narrow(0, 0, pieces).unsqueeze(0);
   out.mask = batch.mask;
   out.features = transformer_->forward(tokens, layers::padding_bias(batch.mask));
   out.sentence = sentence_(layers::masked_mean(out.features, batch.mask));
+  if (!reads_pieces(config_)) out.sentence = out.sentence + encoder_sentence_(batch.encoder_sentence);
   return out;
 }
 

@@ -6,17 +6,17 @@
 //                        "training_step": 3000, "data": "cache/ (1,400 train clips)",
 //                        "tensors": "tensors.pt", "pieces": "pieces.model", "owo": "owo"}
 //   <dir>/tensors.pt    the denoiser's parameters and data statistics (its text encoder included)
-//   <dir>/pieces.model  the caption piece model its text encoder reads
+//   <dir>/pieces.model  the caption piece model its text encoder reads (backbone "pieces" only)
 //   <dir>/owo/          the frozen OwO checkpoint whose joint embeddings it reads
 //   <dir>/training.json, optimizer.pt   optional: the training state for --resume
 //
-//   save_diffusion_checkpoint("runs/diffusion", *model, *owo, pieces_bytes, info);
+//   save_diffusion_checkpoint("runs/diffusion", *model, *owo, captions, info);
 //   LoadedDiffusion d = load_diffusion_checkpoint("runs/diffusion");   // CPU, eval mode
 #pragma once
 
 #include "nec/diffusion/denoiser.h"
 #include "nec/owo/pretrain.h"
-#include "nec/text/piece_model.h"
+#include "nec/text/text_encoder.h"
 
 #include <cstdint>
 #include <functional>
@@ -39,17 +39,17 @@ struct DiffusionCheckpointInfo {
   std::string data;           // what it was trained on
 };
 
-// Writes `dir` atomically: config, tensors, the piece model's bytes and the
-// OwO checkpoint; `extra` may add files to the temporary directory first.
+// Writes `dir` atomically: config, tensors, what the captions need
+// (text::save_checkpoint_captions) and the OwO checkpoint; `extra` may add
+// files to the temporary directory first.
 void save_diffusion_checkpoint(const std::string& dir, MotionDenoiserImpl& model, owo::OwoPretrainerImpl& owo,
-                               const std::string& piece_model_bytes, const DiffusionCheckpointInfo& info,
+                               const text::CaptionReader& captions, const DiffusionCheckpointInfo& info,
                                const std::function<void(const std::string&)>& extra = {});
 
 struct LoadedDiffusion {
   MotionDenoiser model{nullptr};  // CPU, eval mode
   owo::OwoPretrainer owo{nullptr};  // CPU, eval mode
-  std::optional<text::PieceModel> pieces;
-  std::string piece_model_path;
+  text::CaptionReader captions;
   DiffusionCheckpointInfo info;
 };
 

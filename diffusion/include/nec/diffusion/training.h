@@ -95,14 +95,14 @@ at::Tensor velocity_loss(const at::Tensor& predicted, const at::Tensor& target, 
 // and OwO encoders read (none when neither reads words).
 struct DiffusionTrainingInputs {
   owo::OwoPretrainer owo{nullptr};
-  std::string piece_model_path;
+  text::CaptionReader captions;
   std::optional<LoadedDiffusion> pose;
   std::optional<text::WordVectors> vectors;
 };
 
 // The inputs from the checkpoint being resumed (`resume_dir` not empty), else
-// the pose stage's `owo_dir` and `pieces_path` or the motion stage's
-// `pose_dir` (a pose-stage checkpoint). Sets config.model's fields that come
+// the pose stage's `owo_dir` and `pieces_path` (the piece model when
+// model.text reads pieces) or the motion stage's `pose_dir` (a pose-stage checkpoint). Sets config.model's fields that come
 // from them: the pose model's whole config when a pose stage resumes, else the
 // skeleton width and vocabulary of a fresh one. InputError naming the file for
 // a damaged checkpoint, a motion-stage `pose_dir`, or word vectors whose width
@@ -114,8 +114,9 @@ DiffusionTrainingInputs load_training_inputs(DiffusionStage stage, DiffusionTrai
 
 class DiffusionTrainer {
  public:
-  // Stage pose: a fresh denoiser (weights from config.seed; piece embeddings
-  // from the word vectors where a piece is a whole word; data statistics from
+  // Stage pose: a fresh denoiser (weights from config.seed; with the pieces
+  // backbone, piece embeddings from the word vectors where a piece is a whole
+  // word; data statistics from
   // the train clips) with the frozen `owo`. Stage motion: the denoiser of
   // `pose` (a pose-stage checkpoint, or the motion-stage one being resumed)
   // with its pose model's weights frozen. `vectors`: the word vectors the text and OwO encoders
@@ -123,7 +124,7 @@ class DiffusionTrainer {
   // smaller than a batch or a caption is longer than the text encoder takes.
   DiffusionTrainer(const DiffusionTrainConfig& config, DiffusionStage stage, const DatasetCache& cache,
                    std::string data_name, owo::OwoPretrainer owo, std::optional<LoadedDiffusion> pose,
-                   const std::string& piece_model_path, const text::WordVectors* vectors, const c10::Device& device,
+                   text::CaptionReader captions, const text::WordVectors* vectors, const c10::Device& device,
                    const train::Communicator* ranks = nullptr);
   ~DiffusionTrainer();
   DiffusionTrainer(const DiffusionTrainer&) = delete;
@@ -158,8 +159,7 @@ class DiffusionTrainer {
   const DatasetCache& cache_;
   std::string data_name_;
   owo::OwoPretrainer owo_;
-  text::PieceModel pieces_;
-  std::string piece_model_bytes_;
+  text::CaptionReader captions_;  // read the captions; saved with checkpoints
   const text::WordVectors* vectors_;
   c10::Device device_;
   const train::Communicator* ranks_;

@@ -9,7 +9,7 @@
 //   at::Tensor scores = texts.matmul(motions.t());                                // cosine similarities
 //
 // A checkpoint directory holds config.json (format "nec-evaluator"), the
-// tensors, the piece model the text encoder reads, and the frozen OwO encoder
+// tensors, the piece model the text encoder reads (backbone "pieces"), and the frozen OwO encoder
 // in owo/; a training checkpoint adds the training state and, in best/, the
 // evaluator with the best validation R-Precision so far.
 #pragma once
@@ -19,7 +19,6 @@
 #include "nec/corpus/dataset.h"
 #include "nec/corpus/preprocess.h"
 #include "nec/owo/pretrain.h"
-#include "nec/text/piece_model.h"
 #include "nec/text/text_encoder.h"
 #include "nec/text/word_vectors.h"
 
@@ -83,17 +82,17 @@ struct EvaluatorCheckpointInfo {
   double best_r_precision = 0;   // its validation R@3
 };
 
-// Writes `dir` atomically: config, tensors, the piece model (its file's bytes)
-// and the OwO checkpoint; `extra` may add files to the temporary directory first.
+// Writes `dir` atomically: config, tensors, what the captions need
+// (save_checkpoint_captions) and the OwO checkpoint; `extra` may add files to
+// the temporary directory first.
 void save_evaluator_checkpoint(const std::string& dir, EvaluatorImpl& model, owo::OwoPretrainerImpl& owo,
-                               const std::string& piece_model_bytes, const EvaluatorCheckpointInfo& info,
+                               const text::CaptionReader& captions, const EvaluatorCheckpointInfo& info,
                                const std::function<void(const std::string&)>& extra = {});
 
 struct LoadedEvaluator {
   Evaluator model{nullptr};  // eval mode
   owo::OwoPretrainer owo{nullptr};
-  std::optional<text::PieceModel> pieces;
-  std::string piece_model_path;
+  text::CaptionReader captions;
   EvaluatorCheckpointInfo info;
 };
 
@@ -104,7 +103,7 @@ LoadedEvaluator load_evaluator_checkpoint(const std::string& dir);
 // What EvaluatorSession runs, on any model (e.g. one being trained; put it in
 // eval mode first): (N, D) unit-length embeddings of captions, and of clips
 // of `cache`, each whole or its middle max_frames when longer.
-at::Tensor embed_captions(EvaluatorImpl& model, const text::PieceModel& pieces, const text::WordVectors* vectors,
+at::Tensor embed_captions(EvaluatorImpl& model, const text::CaptionReader& reader, const text::WordVectors* vectors,
                           const std::vector<std::string>& captions, const std::string& where, const c10::Device& device);
 at::Tensor embed_clips(EvaluatorImpl& model, owo::OwoEncoderImpl& owo, const text::WordVectors* vectors,
                        const DatasetCache& cache, const std::vector<int>& clips, const c10::Device& device);

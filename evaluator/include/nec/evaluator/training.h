@@ -4,7 +4,8 @@
 // embedding must describe the motion, not the rig).
 //
 //   EvaluatorTrainConfig config = read_evaluator_train_config("configs/evaluator_cpu.json");
-//   EvaluatorTrainer trainer(config, cache, "cache/", owo, pieces_path, &vectors, torch::kCPU);
+//   const text::CaptionReader captions = text::CaptionReader::for_training(config.model.text, pieces_path);
+//   EvaluatorTrainer trainer(config, cache, "cache/", owo, captions, &vectors, torch::kCPU);
 //   run_training(trainer.loop_schedule(), 0, trainer.hooks("runs/eval"));
 //
 // Loss: symmetric InfoNCE over the batch (CLIP) with a learnt temperature;
@@ -105,15 +106,15 @@ at::Tensor contrastive_loss(const at::Tensor& motion, const at::Tensor& text, co
 
 class EvaluatorTrainer {
  public:
-  // A fresh evaluator (weights from config.seed; piece embeddings from the
-  // word vectors where a piece is a whole word) and the frozen `owo`, on the
-  // train-split clips of `cache` that have captions. `piece_model_path`: the
-  // piece model (`nec text train-tokenizer`), copied into checkpoints.
-  // `vectors` may be null when neither encoder reads words. InputError when
+  // A fresh evaluator (weights from config.seed; with the pieces backbone,
+  // piece embeddings from the word vectors where a piece is a whole word) and
+  // the frozen `owo`, on the train-split clips of `cache` that have captions.
+  // `captions` reads them (CaptionReader::for_training of config.model.text)
+  // and goes into checkpoints. `vectors` may be null when neither encoder reads words. InputError when
   // the train split has fewer captioned clips than a batch, or a train or val
   // caption is longer than model.text.max_pieces.
   EvaluatorTrainer(const EvaluatorTrainConfig& config, const DatasetCache& cache, std::string data_name,
-                   owo::OwoPretrainer owo, const std::string& piece_model_path, const text::WordVectors* vectors,
+                   owo::OwoPretrainer owo, text::CaptionReader captions, const text::WordVectors* vectors,
                    const c10::Device& device, const train::Communicator* ranks = nullptr);
   ~EvaluatorTrainer();
   EvaluatorTrainer(const EvaluatorTrainer&) = delete;
@@ -153,8 +154,7 @@ class EvaluatorTrainer {
   std::string data_name_;
   Evaluator model_{nullptr};
   owo::OwoPretrainer owo_;
-  text::PieceModel pieces_;
-  std::string piece_model_bytes_;  // the piece model file, written into every checkpoint
+  text::CaptionReader captions_;  // written into every checkpoint
   const text::WordVectors* vectors_;
   c10::Device device_;
   const train::Communicator* ranks_;

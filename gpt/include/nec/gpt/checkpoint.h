@@ -5,17 +5,17 @@
 //                        "fps": 30, "downsampling": 4, "training_step": 3000, "data": "cache/ (1,400 clips)",
 //                        "tensors": "tensors.pt", "pieces": "pieces.model", "tat": "tat"}
 //   <dir>/tensors.pt    the GPT's parameters (its text encoder included)
-//   <dir>/pieces.model  the caption piece model its text encoder reads
+//   <dir>/pieces.model  the caption piece model its text encoder reads (backbone "pieces" only)
 //   <dir>/tat/          the tokenizer checkpoint whose tokens it predicts (with the OwO encoder in tat/owo/)
 //   <dir>/training.json, optimizer.pt   optional: the training state for --resume
 //
-//   save_gpt_checkpoint("runs/gpt", *gpt, pieces_bytes, tokenizer, info);
+//   save_gpt_checkpoint("runs/gpt", *gpt, captions, tokenizer, info);
 //   LoadedGpt g = load_gpt_checkpoint("runs/gpt");   // CPU, eval mode; g.tat_dir for tat::open_tokenizer_session
 #pragma once
 
 #include "nec/gpt/model.h"
 #include "nec/tat/checkpoint.h"
-#include "nec/text/piece_model.h"
+#include "nec/text/text_encoder.h"
 
 #include <cstdint>
 #include <functional>
@@ -33,16 +33,16 @@ struct GptCheckpointInfo {
   std::string data;            // what it was trained on
 };
 
-// Writes `dir` atomically: config, tensors, the piece model's bytes and the
-// tokenizer (`tokenizer`'s models and info); `extra` may add files first.
-void save_gpt_checkpoint(const std::string& dir, TokenGptImpl& model, const std::string& piece_model_bytes,
+// Writes `dir` atomically: config, tensors, what the captions need
+// (text::save_checkpoint_captions) and the tokenizer (`tokenizer`'s models and
+// info); `extra` may add files first.
+void save_gpt_checkpoint(const std::string& dir, TokenGptImpl& model, const text::CaptionReader& captions,
                          tat::LoadedTatCheckpoint& tokenizer, const GptCheckpointInfo& info,
                          const std::function<void(const std::string&)>& extra = {});
 
 struct LoadedGpt {
   TokenGpt model{nullptr};  // CPU, eval mode
-  std::optional<text::PieceModel> pieces;
-  std::string piece_model_path;
+  text::CaptionReader captions;
   std::string tat_dir;      // the tokenizer checkpoint inside
   GptCheckpointInfo info;
 };

@@ -90,14 +90,14 @@ GptLoss gpt_loss(const GptLogits& logits, const at::Tensor& targets, int64_t glo
 
 class GptTrainer {
  public:
-  // A fresh GPT (weights from config.seed; piece embeddings from the word
-  // vectors where a piece is a whole word) to predict the codes of
-  // `tokenizer` (a session opened on `tokenizer_dir`), on the captioned clips
-  // of `cache`. `vectors`: the word vectors of the text encoder (null when
+  // A fresh GPT (weights from config.seed; with the pieces backbone, piece
+  // embeddings from the word vectors where a piece is a whole word) to predict
+  // the codes of `tokenizer` (a session opened on `tokenizer_dir`), on the
+  // captioned clips of `cache`, read by `captions` (saved with checkpoints). `vectors`: the word vectors of the text encoder (null when
   // model.text.word_dim is 0). InputError when the train split has no
   // captioned clip, or a caption is longer than model.text.max_pieces.
   GptTrainer(const GptTrainConfig& config, const DatasetCache& cache, std::string data_name,
-             tat::TokenizerSession& tokenizer, const std::string& tokenizer_dir, const std::string& piece_model_path,
+             tat::TokenizerSession& tokenizer, const std::string& tokenizer_dir, text::CaptionReader captions,
              const text::WordVectors* vectors, const c10::Device& device, const train::Communicator* ranks = nullptr);
   ~GptTrainer();
   GptTrainer(const GptTrainer&) = delete;
@@ -132,8 +132,7 @@ class GptTrainer {
   const DatasetCache& cache_;
   std::string data_name_;
   tat::TokenizerSession& tokenizer_;
-  text::PieceModel pieces_;
-  std::string piece_model_bytes_;
+  text::CaptionReader captions_;
   const text::WordVectors* vectors_;
   c10::Device device_;
   const train::Communicator* ranks_;

@@ -1,17 +1,28 @@
 // The text encoder (DESIGN.md, Text) shared by the evaluator, gpt/ and
-// diffusion/: caption pieces plus the word vector of the word each piece
-// belongs to, a small pre-norm transformer, a pooled sentence vector and
-// per-piece features with their mask.
+// diffusion/: what reads the caption (its backbone), a small pre-norm
+// transformer, a pooled sentence vector and per-piece features with their mask.
 //
-//   const PieceModel pieces = PieceModel::load("spm.model");
-//   TextEncoderConfig config;  config.vocab_size = pieces.vocab_size();  config.word_dim = vectors.dim();
+//   TextEncoderConfig config;  config.backbone = kUseLiteBackbone;
+//   const CaptionReader captions = CaptionReader::for_training(config, /*piece_model_path=*/"");
 //   TextEncoder encoder(config);
-//   encoder->init_piece_embeddings(pieces, vectors);        // whole-word pieces start at their GloVe vector
-//   TextBatch batch = make_text_batch({"a dog trots forward"}, pieces, &vectors, config, "query");
-//   TextEncoding out = encoder->forward(batch);
+//   TextEncoding out = encoder->forward(captions.read({"a dog trots forward"}, nullptr, "query"));
 //   // out.sentence (B, output_dim), out.features (B, P, dim), out.mask (B, P)
 //
-// Why the word channel: a word no training caption used ("hound",
+// Two backbones. "use-lite": the pretrained sentence encoder
+// (text/sentence_encoder.h), frozen, under a small trainable head. Why: words
+// no caption of the corpus used ("pup", "greets") land near the words it did,
+// as the pretrained encoder learnt from far more English than our captions.
+// With layers = 0 the head reads the encoder's sentence vector alone: one
+// GELU hidden layer of width dim (the single "piece" of features) and a
+// linear map to the sentence vector. With layers > 0 a transformer reads the
+// encoder's per-piece features and the sentence vector adds a linear map of
+// the encoder's own; trained on template captions it learns the pieces
+// themselves and reads new words worse (docs/text.md has the measurements).
+// "pieces": the corpus's own piece model and, with word_dim, GloVe word
+// vectors, trained from scratch with the model (the models before the
+// sentence encoder; checkpoints without a backbone field read pieces).
+//
+// Why the word channel of "pieces": a word no training caption used ("hound",
 // "scuttles") is cut into pieces the encoder never learnt, but its GloVe
 // vector sits near the words it did learn ("dog", "crawls"), and every piece
 // of the word carries it. In training, piece ids are replaced by the unknown
@@ -22,7 +33,10 @@
 
 #include "nec/corpus/dataset.h"
 #include "nec/text/piece_model.h"
+#include "nec/text/sentence_encoder.h"
 #include "nec/text/word_vectors.h"
+
+#include <nlohmann/json_fwd.hpp>
 
 #include <ATen/core/Tensor.h>
 #include <c10/core/Device.h>
@@ -33,6 +47,7 @@
 #include <torch/nn/pimpl.h>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -46,18 +61,24 @@ class TransformerStackImpl;
 
 namespace nec::text {
 
+constexpr const char* kPiecesBackbone = "pieces";
+constexpr const char* kUseLiteBackbone = "use-lite";
+constexpr int64_t kUseLiteWidth = 512;  // the sentence encoder's feature and sentence width
+
 // Hyper-parameters; saved with a model.
 struct TextEncoderConfig {
-  int64_t vocab_size = 1000;  // pieces of the piece model (set from it), e.g. 1000
-  int64_t word_dim = 100;     // width of the word vectors, e.g. 100 (GloVe); 0 = no word channel
+  std::string backbone = kPiecesBackbone;  // what reads the caption: "pieces" or "use-lite" (see above)
+  int64_t vocab_size = 1000;  // pieces: pieces of the piece model (set from it), e.g. 1000
+  int64_t word_dim = 100;     // pieces: width of the word vectors, e.g. 100 (GloVe); 0 = no word channel (use-lite: 0)
   int64_t dim = 128;          // token width D, e.g. 128
-  int64_t layers = 2;         // transformer layers, e.g. 2
+  int64_t layers = 2;         // transformer layers, e.g. 2; use-lite may have 0 (the sentence vector alone)
   int64_t heads = 4;          // attention heads; must divide dim
   int64_t feedforward = 256;  // FFN hidden width, e.g. 2 * dim
-  int64_t max_pieces = 48;    // longest caption in pieces; longer ones are refused
+  int64_t max_pieces = 48;    // longest caption in pieces; longer ones are refused (not with use-lite, 0 layers)
   int64_t output_dim = 128;   // width of the sentence vector
   double dropout = 0.1;       // in the transformer, training only
-  double piece_dropout = 0.1; // chance a piece id is read as unknown in training (the word channel stays)
+  double piece_dropout = 0.1; // training: pieces, chance a piece id is read as unknown (the word channel stays);
+                              // use-lite, chance a piece's features are zeroed (the sentence vector stays)
   // A word with a vector that the piece model cuts into several pieces (a word
   // the piece model's corpus never used: "flutters" -> "fl" "utter" "s") gets
   // the unknown piece for each of them, so that it is read from its vector
@@ -69,16 +90,15 @@ struct TextEncoderConfig {
 };
 void visit_fields(train::ConfigVisitor& v, TextEncoderConfig& c);  // train/config_fields.h
 
-// The piece model a checkpoint's text encoder reads, from `path`; a piece count other than
-// config.vocab_size fails through `fields` (naming the checkpoint's config.json and its hint).
-PieceModel load_checkpoint_pieces(const std::string& path, const TextEncoderConfig& config,
-                                  const train::JsonFields& fields);
-
-// Captions as tensors, padded to the longest.
+// Captions as tensors, padded to the longest. Backbone "pieces" fills ids,
+// word_vectors and word_known; "use-lite" fills encoder_features and
+// encoder_sentence; both the mask.
 struct TextBatch {
   at::Tensor ids;           // (B, P) int64 piece ids, kPadPiece at padding
   at::Tensor word_vectors;  // (B, P, word_dim) float32: the vector of each piece's word; 0 for unknown words, padding
   at::Tensor word_known;    // (B, P, 1) float32: 1 where the word has a vector
+  at::Tensor encoder_features;  // (B, P, kUseLiteWidth) the sentence encoder's per-piece features, 0 at padding
+  at::Tensor encoder_sentence;  // (B, kUseLiteWidth) its unit sentence vectors
   at::Tensor mask;          // (B, P) bool, true for real pieces
 
   TextBatch to(const c10::Device& device) const;
@@ -91,16 +111,65 @@ struct TextBatch {
 TextBatch make_text_batch(const std::vector<std::string>& captions, const PieceModel& pieces,
                           const WordVectors* vectors, const TextEncoderConfig& config, const std::string& where);
 
-// Refuses, before training starts rather than at the step that draws it, a
-// caption of a train or val clip of `cache` that is empty, has no letter or
-// has more than config.max_pieces pieces: InputError naming `data_name`, the
-// clip and the caption.
-void check_corpus_captions(const DatasetCache& cache, const PieceModel& pieces, const TextEncoderConfig& config,
-                           const std::string& data_name);
+// Backbone "use-lite": the frozen sentence encoder's outputs for each
+// normalized, checked caption (InputError as make_text_batch).
+TextBatch make_sentence_batch(const std::vector<std::string>& captions, const SentenceEncoderImpl& encoder,
+                              const TextEncoderConfig& config, const std::string& where);
+
+// The sentence encoder setup fetched (default_sentence_encoder_dir()), loaded
+// once per process and shared by every model that reads it.
+SentenceEncoder shared_sentence_encoder();
+
+// How a model's captions become a TextBatch: the piece model of backbone
+// "pieces" (with the word vectors the caller gives) or the shared sentence
+// encoder of "use-lite". Cheap to copy.
+class CaptionReader {
+ public:
+  CaptionReader() = default;
+  // For a model about to be trained: "pieces" reads the piece model at
+  // piece_model_path (required) and sets config.vocab_size from it; "use-lite"
+  // opens the sentence encoder and ignores the path.
+  static CaptionReader for_training(TextEncoderConfig& config, const std::string& piece_model_path);
+
+  const TextEncoderConfig& config() const { return config_; }
+  // The piece model (null for use-lite), its file and that file's bytes (saved with checkpoints; empty for use-lite).
+  const PieceModel* pieces() const { return pieces_.get(); }
+  const std::string& piece_model_path() const { return piece_model_path_; }
+  const std::string& piece_model_bytes() const { return piece_model_bytes_; }
+
+  // Pieces of a normalized caption as the backbone cuts it.
+  int64_t count_pieces(const std::string& caption) const;
+  // make_text_batch or make_sentence_batch; `vectors` as make_text_batch needs them (ignored by use-lite).
+  TextBatch read(const std::vector<std::string>& captions, const WordVectors* vectors, const std::string& where) const;
+  // Refuses, before training starts rather than at the step that draws it, a
+  // caption of a train or val clip of `cache` that is empty, has no letter or
+  // has more than config.max_pieces pieces: InputError naming `data_name`, the
+  // clip and the caption.
+  void check_corpus(const DatasetCache& cache, const std::string& data_name) const;
+
+ private:
+  friend CaptionReader load_checkpoint_captions(const std::string&, const nlohmann::json&, const TextEncoderConfig&,
+                                                const train::JsonFields&);
+  TextEncoderConfig config_;
+  std::shared_ptr<const PieceModel> pieces_;  // shared: a piece model holds a library handle and is not copied
+  std::string piece_model_path_;
+  std::string piece_model_bytes_;
+  SentenceEncoder sentence_encoder_{nullptr};
+};
+
+// The caption part of a model checkpoint: with backbone "pieces" the piece
+// model's file (pieces.model) and the config entry "pieces" naming it; with
+// "use-lite" nothing (setup fetches the sentence encoder; it is not saved).
+void save_checkpoint_captions(const std::string& dir, const CaptionReader& captions, nlohmann::json& config);
+// Reads them back from checkpoint `dir` with config root `root`; a piece model
+// other than config.vocab_size pieces fails through `fields` (naming the
+// checkpoint's config.json and its hint).
+CaptionReader load_checkpoint_captions(const std::string& dir, const nlohmann::json& root,
+                                       const TextEncoderConfig& config, const train::JsonFields& fields);
 
 struct TextEncoding {
   at::Tensor sentence;  // (B, output_dim) pooled sentence vector
-  at::Tensor features;  // (B, P, dim) per-piece features (after the final LayerNorm)
+  at::Tensor features;  // (B, P, dim) per-piece features (after the final LayerNorm); P = 1 with use-lite, 0 layers
   at::Tensor mask;      // (B, P) bool
 };
 
@@ -109,20 +178,23 @@ class TextEncoderImpl : public torch::nn::Module {
   explicit TextEncoderImpl(const TextEncoderConfig& config);
   const TextEncoderConfig& config() const { return config_; }
 
-  // Piece embeddings of the pieces that are whole words of `vectors` ("▁dog"
-  // -> the vector of "dog") become those vectors; returns how many did.
-  // Needs word_dim == vectors.dim().
+  // Backbone "pieces": piece embeddings of the pieces that are whole words of
+  // `vectors` ("▁dog" -> the vector of "dog") become those vectors; returns how
+  // many did. Needs word_dim == vectors.dim().
   int64_t init_piece_embeddings(const PieceModel& pieces, const WordVectors& vectors);
 
   TextEncoding forward(const TextBatch& batch);
 
  private:
+  at::Tensor input_tokens(const TextBatch& batch);  // (B, P, dim) before the positions
+
   TextEncoderConfig config_;
-  torch::nn::Embedding piece_embedding_{nullptr};  // (vocab, word_dim or dim)
-  torch::nn::Linear input_{nullptr};               // [piece ‖ word vector ‖ known] -> dim
-  at::Tensor positions_;                           // (max_pieces, dim) learnt
+  torch::nn::Embedding piece_embedding_{nullptr};  // pieces: (vocab, word_dim or dim)
+  torch::nn::Linear input_{nullptr};               // pieces: [piece ‖ word vector ‖ known] -> dim; use-lite: features -> dim
+  at::Tensor positions_;                           // (max_pieces, dim) learnt; not with use-lite, 0 layers
   std::shared_ptr<layers::TransformerStackImpl> transformer_;
   torch::nn::Linear sentence_{nullptr};            // dim -> output_dim
+  torch::nn::Linear encoder_sentence_{nullptr};    // use-lite: the encoder's sentence vector -> output_dim
 };
 TORCH_MODULE(TextEncoder);
 
