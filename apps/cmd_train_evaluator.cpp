@@ -33,7 +33,7 @@ int run_train_evaluator(int argc, char** argv) {
   declare_training_options(cli);
   cli.epilogue("fields of --config (every one optional; the default after =):\n" +
                train::describe_config(evaluator::EvaluatorTrainConfig{}));
-  cli.example("nec train evaluator --config configs/evaluator_cpu.json --data cache/ --owo runs/owo --pieces spm.model --out runs/eval");
+  cli.example("nec train evaluator --config configs/evaluator_cpu.json --data cache/ --owo runs/owo --out runs/eval");
   cli.example("nec train evaluator --config configs/evaluator_cpu.json --data cache/ --out runs/eval --resume --steps 4000");
   if (!cli.parse(argc, argv)) return 0;
   if (const std::optional<int> workers = run_workers_if_asked(cli, "evaluator", argc, argv)) return *workers;

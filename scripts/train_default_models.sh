@@ -30,7 +30,7 @@ step "tokenizer and evaluator, side by side (1 thread each)"
   --threads 1 --force > "$work/tat.log" 2>&1 &
 tat=$!
 "$nec" train evaluator --config configs/evaluator_cpu.json --data "$work/cache" --owo "$work/owo" \
-  --pieces "$work/spm.model" --out "$work/evaluator" --threads 1 --force > "$work/evaluator.log" 2>&1 &
+  --out "$work/evaluator" --threads 1 --force > "$work/evaluator.log" 2>&1 &
 evaluator=$!
 wait $tat || { tail -n 20 "$work/tat.log"; exit 1; }
 wait $evaluator || { tail -n 20 "$work/evaluator.log"; exit 1; }

@@ -173,6 +173,30 @@ TEST_F(CliDiffusion, GeneratesOnASkeletonNoModelSaw) {
   EXPECT_EQ(read_bvh(path("open.bvh")).motion.frame_count, 24);
 }
 
+TEST_F(CliDiffusion, TrainsAndGeneratesOnTheSentenceEncoder) {
+  // The use-lite backbone with no text layers: no --pieces, no piece model in either stage's checkpoint.
+  const testing::TempDir& d = shared_folder();
+  std::string pose_config = kPoseConfig;
+  const std::string text = R"("text": {"word_dim": 0, "dim": 16, "heads": 2, "feedforward": 32, "layers": 1, "max_pieces": 128,
+                     "output_dim": 16, "dropout": 0.0, "piece_dropout": 0.0})";
+  ASSERT_NE(pose_config.find(text), std::string::npos);
+  pose_config.replace(pose_config.find(text), text.size(),
+                      R"("text": {"backbone": "use-lite", "word_dim": 0, "dim": 16, "layers": 0, "output_dim": 16})");
+  const std::string pose_path = dir_.write("use_pose.json", pose_config);
+  const std::string base = "train diffusion --data " + d / "cache" + " --threads 1 ";
+  const CommandResult pose = run_nec(base + "--stage pose --config " + pose_path + " --owo " + d / "owo" + " --out " + path("use-pose"));
+  ASSERT_EQ(pose.exit_code, 0) << pose.output;
+  const CommandResult motion = run_nec(base + "--stage motion --config " + d / "motion.json" + " --pose " +
+                                       path("use-pose") + " --out " + path("use-motion"));
+  ASSERT_EQ(motion.exit_code, 0) << motion.output;
+  EXPECT_FALSE(fs::exists(fs::path(path("use-motion")) / "pieces.model"));
+  const std::string out = path("use_walk.bvh");
+  const CommandResult run = run_nec("generate \"somebody strolls forward\" --skeleton " + spider() + " -o " + out +
+                                    " --seconds 1 --seed 3 --model " + path("use-motion") + " --threads 1 --steps 4");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(read_bvh(out).skeleton.joint_count(), read_bvh(spider()).skeleton.joint_count());
+}
+
 TEST_F(CliDiffusion, BadInputGetsOneLineAndNoOutput) {
   const std::string out = path("out.bvh");
   // Exit 1 for bad input, 2 for options that do not go together.

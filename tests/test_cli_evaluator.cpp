@@ -61,6 +61,33 @@ TEST_F(CliEvaluator, TrainsKeepsTheBestAndResumes) {
   EXPECT_EQ(again.exit_code, 1) << again.output;
 }
 
+TEST_F(CliEvaluator, TrainsOnTheSentenceEncoderWithoutAPieceModel) {
+  const testing::TempDir& d = shared_folder();
+  write_file_atomic(d / "eval_use.json", R"({
+    "model": {"motion": {"dim": 16, "heads": 2, "feedforward": 32, "temporal_layers": 1, "max_steps": 16, "output_dim": 16},
+              "text": {"backbone": "use-lite", "word_dim": 0, "dim": 16, "layers": 0, "output_dim": 16}},
+    "data": {"window_frames": 32},
+    "batch_size": 8, "steps": 6, "log_every": 2, "validate_every": 3, "checkpoint_every": 3, "seed": 1})");
+  const std::string out = path("runs/eval-use");
+  const std::string train =
+      "train evaluator --config " + d / "eval_use.json" + " --data " + cache() + " --owo " + d / "owo" + " --out " + out;
+  const CommandResult first = run_nec(train + " --threads 1");
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_FALSE(fs::exists(fs::path(out) / "pieces.model"));
+  EXPECT_TRUE(contains(read_file(out + "/config.json"), R"("backbone": "use-lite")"));
+  const CommandResult resumed = run_nec(train + " --threads 1 --resume --steps 8");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_TRUE(contains(resumed.output, "steps 7-8 of")) << resumed.output;
+  const CommandResult query = run_nec("retrieve \"somebody strolls along\" --db " + cache() + " --evaluator " + out + " -k 2");
+  ASSERT_EQ(query.exit_code, 0) << query.output;
+  EXPECT_TRUE(contains(query.output, "| 2 | ")) << query.output;
+  // The pieces backbone (the default when the config does not say) still needs its piece model.
+  const CommandResult no_pieces = run_nec("train evaluator --config " + d / "eval.json" + " --data " + cache() +
+                                          " --owo " + d / "owo" + " --out " + path("runs/eval-no-pieces"));
+  EXPECT_EQ(no_pieces.exit_code, 2) << no_pieces.output;
+  EXPECT_TRUE(contains(no_pieces.output, "--pieces SPM is required")) << no_pieces.output;
+}
+
 TEST_F(CliEvaluator, RetrievalEvaluationAndQueries) {
   const std::string out = path("runs/eval");
   ASSERT_EQ(run_nec(train_evaluator(out)).exit_code, 0);

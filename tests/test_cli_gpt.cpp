@@ -165,6 +165,23 @@ TEST_F(CliGpt, GeneratesOnASkeletonNoModelSaw) {
 
 // The baselines' tokens carry a GPT too (the evaluation compares the three): NEC-VQ has one code per step, the
 // zero-padding baseline reads no OwO embeddings, yet the GPT's skeleton features still come from its OwO.
+TEST_F(CliGpt, TrainsAndGeneratesOnTheSentenceEncoder) {
+  // The use-lite backbone with no text layers: no piece model, the sentence vector the one piece attended to.
+  const std::string config = dir_.write("use.json", R"({
+    "model": {"dim": 32, "layers": 2, "heads": 2, "feedforward": 64, "max_steps": 16,
+              "text": {"backbone": "use-lite", "word_dim": 0, "dim": 16, "layers": 0, "output_dim": 16}},
+    "batch_size": 8, "steps": 4, "log_every": 2, "validate_every": 2, "checkpoint_every": 0, "seed": 2})");
+  const CommandResult train = run_nec("train gpt --config " + config + " --data " + shared("cache") + " --tat " +
+                                      shared("tat") + " --threads 1 --out " + path("gpt-use"));
+  ASSERT_EQ(train.exit_code, 0) << train.output;
+  EXPECT_FALSE(fs::exists(fs::path(path("gpt-use")) / "pieces.model"));
+  const std::string out = path("use_walk.bvh");
+  const CommandResult run = run_nec("generate \"somebody strolls forward\" --skeleton " + spider() + " -o " + out +
+                                    " --seconds 1 --seed 3 --model " + path("gpt-use") + " --threads 1");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(read_bvh(out).skeleton.joint_count(), read_bvh(spider()).skeleton.joint_count());
+}
+
 TEST_F(CliGpt, TheBaselineTokenizersCarryAGpt) {
   const testing::TempDir& d = shared_folder();
   for (const std::string kind : {"nec-vq", "zero-pad-rvq"}) {

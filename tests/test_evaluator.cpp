@@ -232,6 +232,13 @@ TEST_F(EvaluatorTest, AResumedRunTakesTheStepsOfOneThatNeverStoppedAndKeepsTheBe
   hooks.checkpoint(3);
   ASSERT_TRUE(fs::exists(fs::path(dir / "run") / "best" / "config.json"));
   EXPECT_EQ(first.best_step(), 2);
+  {  // The same model validated again ties: the later step is the best (it has trained at least as long).
+    EvaluatorTrainer tied(config, cache, "actions", testing::tiny_frozen_owo(), reader_for(config), &vectors_, torch::kCPU);
+    train::TrainingHooks tied_hooks = tied.hooks(dir / "tied");
+    tied_hooks.validate(2);
+    tied_hooks.validate(4);
+    EXPECT_EQ(tied.best_step(), 4);
+  }
 
   EvaluatorTrainer resumed(config, cache, "actions", testing::tiny_frozen_owo(), reader_for(config), &vectors_, torch::kCPU);
   EXPECT_EQ(resumed.resume(dir / "run"), 3);

@@ -254,7 +254,8 @@ train::TrainingHooks EvaluatorTrainer::hooks(const std::string& out_dir) {
   hooks.validate = [this](int64_t step) {
     train::LossTerms terms = *validate();
     const double r3 = terms[2].second;
-    if (info_.best_step == 0 || r3 > info_.best_r_precision) {
+    // A tie goes to the later, longer-trained model: R@3 reaches 1.0 early on a small validation split.
+    if (info_.best_step == 0 || r3 >= info_.best_r_precision) {
       info_.best_step = step;
       info_.best_r_precision = r3;
       // Kept in memory until the next checkpoint writes it to <out>/best.
