@@ -146,7 +146,9 @@ TextBatch make_sentence_batch(const std::vector<std::string>& captions, const Se
   for (size_t i = 0; i < captions.size(); ++i) {
     const std::string name = caption_name(where, i, captions.size());
     normalized.push_back(checked_caption(captions[i], name));
-    check_piece_count(static_cast<int64_t>(encoder.pieces().encode(normalized.back()).size()), config, name, captions[i]);
+    if (reads_each_piece(config)) {
+      check_piece_count(static_cast<int64_t>(encoder.pieces().encode(normalized.back()).size()), config, name, captions[i]);
+    }
   }
   const SentenceEncoding encoded = encoder.encode(normalized);
   TextBatch batch;
