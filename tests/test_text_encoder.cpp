@@ -25,6 +25,16 @@ using text::TextBatch;
 using text::TextEncoder;
 using text::TextEncoderConfig;
 
+// Piece dropout draws anew at every training forward pass and never in eval mode.
+void expect_dropout_only_in_training(TextEncoder& encoder, const TextBatch& batch) {
+  encoder->train();
+  std::vector<double> outputs;
+  for (int i = 0; i < 4; ++i) outputs.push_back(encoder->forward(batch).sentence.sum().item<double>());
+  EXPECT_FALSE(outputs[0] == outputs[1] && outputs[1] == outputs[2] && outputs[2] == outputs[3]);
+  encoder->eval();
+  EXPECT_EQ(encoder->forward(batch).sentence.sum().item<double>(), encoder->forward(batch).sentence.sum().item<double>());
+}
+
 class TextEncoderTest : public testing::CorpusTextTest {
  protected:
   TextEncoderTest() : pieces_(text::PieceModel::load(pieces_path())), vectors_(text::WordVectors::load(vectors_path())) {
@@ -188,12 +198,7 @@ TEST_F(TextEncoderTest, PieceDropoutActsOnlyInTraining) {
   torch::manual_seed(0);
   TextEncoder encoder(config_);
   const TextBatch batch = text::make_text_batch({"a dog walks forward"}, pieces_, &vectors_, config_, "query");
-  encoder->train();
-  std::vector<double> outputs;
-  for (int i = 0; i < 4; ++i) outputs.push_back(encoder->forward(batch).sentence.sum().item<double>());
-  EXPECT_FALSE(outputs[0] == outputs[1] && outputs[1] == outputs[2] && outputs[2] == outputs[3]);
-  encoder->eval();
-  EXPECT_EQ(encoder->forward(batch).sentence.sum().item<double>(), encoder->forward(batch).sentence.sum().item<double>());
+  expect_dropout_only_in_training(encoder, batch);
 }
 
 // The use-lite backbone: the frozen sentence encoder under a small trainable head.
@@ -320,12 +325,7 @@ TEST_F(UseLiteTextEncoderTest, PieceDropoutZeroesFeaturesOnlyInTraining) {
   torch::manual_seed(0);
   TextEncoder encoder(config_);
   const TextBatch batch = reader_.read({"a dog walks forward"}, nullptr, "query");
-  encoder->train();
-  std::vector<double> outputs;
-  for (int i = 0; i < 4; ++i) outputs.push_back(encoder->forward(batch).sentence.sum().item<double>());
-  EXPECT_FALSE(outputs[0] == outputs[1] && outputs[1] == outputs[2] && outputs[2] == outputs[3]);
-  encoder->eval();
-  EXPECT_EQ(encoder->forward(batch).sentence.sum().item<double>(), encoder->forward(batch).sentence.sum().item<double>());
+  expect_dropout_only_in_training(encoder, batch);
 }
 
 TEST_F(UseLiteTextEncoderTest, EmptyAndOverlongCaptionsAreRefusedNamingThem) {
