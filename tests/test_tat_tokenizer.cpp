@@ -323,11 +323,14 @@ TEST(TatTokenizer, BackwardInPartsGivesTheWholeBatchGradients) {
     const auto [parts, parts_loss] = gradients_and_loss(16 * 7);  // one item per pass
     EXPECT_NEAR(parts_loss, whole_loss, 1e-5 * std::abs(whole_loss)) << tat::to_string(kind);
     ASSERT_EQ(parts.size(), whole.size());
+    // Measured against each parameter's largest gradient: summation order differs between the passes, and
+    // float rounding through attention reaches ~7e-4 of it on some CPUs; a wrong share would be >= 1/4.
     for (size_t i = 0; i < whole.size(); ++i) {
-      EXPECT_TRUE(torch::allclose(parts[i], whole[i], 1e-3, 1e-6))
-          << tat::to_string(kind) << " parameter " << i << ": max difference "
-          << (parts[i] - whole[i]).abs().max().item<double>() << ", largest gradient "
-          << whole[i].abs().max().item<double>();
+      const double difference = (parts[i] - whole[i]).abs().max().item<double>();
+      const double largest = whole[i].abs().max().item<double>();
+      EXPECT_LE(difference, 5e-3 * largest + 1e-7)
+          << tat::to_string(kind) << " parameter " << i << ": max difference " << difference
+          << ", largest gradient " << largest;
     }
   }
 }
