@@ -42,6 +42,11 @@ void check_caption_inputs(const text::TextEncoderConfig& text, const std::string
     throw UsageError("--pieces SPM is required: the config's model.text.backbone is \"pieces\" (or set it to \"" +
                      std::string(text::kUseLiteBackbone) + "\")");
   }
+  // A piece model the config would not read is refused rather than ignored.
+  if (text.backbone != text::kPiecesBackbone && !pieces_path.empty()) {
+    throw UsageError("--pieces is read only by the \"" + std::string(text::kPiecesBackbone) +
+                     "\" text backbone; the config's model.text.backbone is \"" + text.backbone + "\" (leave --pieces out)");
+  }
 }
 
 std::optional<int> run_workers_if_asked(const CommandLine& cli, const std::string& kind, int argc, char** argv) {

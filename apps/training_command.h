@@ -43,8 +43,8 @@ void validate_config(const Config& config, const std::string& config_path) {
 }
 
 // Before a fresh training loads anything: checks the text config
-// (InputError naming `config_path`) and that --pieces was given when it reads
-// pieces (UsageError).
+// (InputError naming `config_path`) and that --pieces was given exactly when it
+// reads pieces (UsageError).
 void check_caption_inputs(const text::TextEncoderConfig& text, const std::string& pieces_path,
                           const std::string& config_path);
 

@@ -2,7 +2,7 @@
 # The diffusion model's ablation (How to Move Your Dragon, Table 1 and Figure 4) at the CPU configs' size:
 # each variant trained in two stages on CACHE (configs/diffusion_{pose,motion}_cpu.json with one change),
 # then judged by scripts/eval_generation.sh on EVAL_CACHE's test split with EVALUATOR.
-#   scripts/diffusion_ablation.sh CACHE OWO PIECES EVAL_CACHE EVALUATOR OUT_DIR [CLIPS] [VARIANT ...]
+#   scripts/diffusion_ablation.sh CACHE OWO EVAL_CACHE EVALUATOR OUT_DIR [CLIPS] [VARIANT ...]
 # Variants: owo (the default: OwO joint identity, rig augmentation), tree (TreePE + RestPE instead of OwO),
 # no-augment (rig augmentation off); all three by default. CLIPS: at most this many test clips per dataset
 # (default 60). Writes OUT_DIR/<variant>/{pose,motion} and OUT_DIR/<variant>/eval/t2m.md; about 40 minutes
@@ -10,12 +10,12 @@
 # every training and generation (1 lets two jobs share a 2-core machine without their threads spinning).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ $# -lt 6 ]; then
-  echo "usage: scripts/diffusion_ablation.sh CACHE OWO PIECES EVAL_CACHE EVALUATOR OUT_DIR [CLIPS] [VARIANT ...]" >&2
+if [ $# -lt 5 ]; then
+  echo "usage: scripts/diffusion_ablation.sh CACHE OWO EVAL_CACHE EVALUATOR OUT_DIR [CLIPS] [VARIANT ...]" >&2
   exit 2
 fi
-cache=$1 owo=$2 pieces=$3 eval_cache=$4 evaluator=$5 out=$6 clips=${7:-60}
-shift $(( $# < 7 ? $# : 7 ))
+cache=$1 owo=$2 eval_cache=$3 evaluator=$4 out=$5 clips=${6:-60}
+shift $(( $# < 6 ? $# : 6 ))
 variants=("$@")
 [ ${#variants[@]} -gt 0 ] || variants=(owo tree no-augment)
 nec=${NEC:-build/apps/nec}
@@ -41,8 +41,8 @@ json.dump(pose, open(f"{dir}/pose.json", "w"), indent=1)
 json.dump(motion, open(f"{dir}/motion.json", "w"), indent=1)
 PY
   echo "== $variant: training"
-  "$nec" train diffusion --stage pose --config "$dir/pose.json" --data "$cache" --owo "$owo" --pieces "$pieces" \
-    --out "$dir/pose" --threads "$threads" --force > "$dir/pose.log"
+  "$nec" train diffusion --stage pose --config "$dir/pose.json" --data "$cache" --owo "$owo" --out "$dir/pose" \
+    --threads "$threads" --force > "$dir/pose.log"
   "$nec" train diffusion --stage motion --config "$dir/motion.json" --data "$cache" --pose "$dir/pose" \
     --out "$dir/motion" --threads "$threads" --force > "$dir/motion.log"
   tail -n 2 "$dir/pose.log" "$dir/motion.log"

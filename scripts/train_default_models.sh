@@ -20,7 +20,6 @@ step "data: zoo (hexapods held out) and CMU"
 "$nec" zoo --out "$work/zoo" --creatures 90 --clips-per-creature 8 --seed 11 --hold-out hexapod --quiet
 "$nec" prepare zoo="$work/zoo/seen" zoo_held_out="$work/zoo/held_out" cmu=/usr/share/assimp/models/BVH \
   --hold-out-dataset zoo_held_out --creature cmu=person -o "$work/cache" --quiet
-"$nec" text train-tokenizer --data "$work/cache" -o "$work/spm.model" --force
 
 step "skeleton encoder"
 "$nec" train owo --config configs/owo_default.json --data "$work/cache" --out "$work/owo" --threads 2 --force
@@ -37,12 +36,12 @@ wait $evaluator || { tail -n 20 "$work/evaluator.log"; exit 1; }
 tail -n 3 "$work/tat.log" "$work/evaluator.log"
 
 step "GPT"
-"$nec" train gpt --config configs/gpt_cpu.json --data "$work/cache" --tat "$work/tat" --pieces "$work/spm.model" \
-  --out "$work/gpt" --threads 2 --force
+"$nec" train gpt --config configs/gpt_cpu.json --data "$work/cache" --tat "$work/tat" --out "$work/gpt" \
+  --threads 2 --force
 
 step "diffusion model: the pose stage, then the motion stage on it"
 "$nec" train diffusion --stage pose --config configs/diffusion_pose_cpu.json --data "$work/cache" --owo "$work/owo" \
-  --pieces "$work/spm.model" --out "$work/diffusion_pose" --threads 2 --force
+  --out "$work/diffusion_pose" --threads 2 --force
 "$nec" train diffusion --stage motion --config configs/diffusion_motion_cpu.json --data "$work/cache" \
   --pose "$work/diffusion_pose" --out "$work/diffusion" --threads 2 --force
 

@@ -86,6 +86,10 @@ TEST_F(CliEvaluator, TrainsOnTheSentenceEncoderWithoutAPieceModel) {
                                           " --owo " + d / "owo" + " --out " + path("runs/eval-no-pieces"));
   EXPECT_EQ(no_pieces.exit_code, 2) << no_pieces.output;
   EXPECT_TRUE(contains(no_pieces.output, "--pieces SPM is required")) << no_pieces.output;
+  // A piece model the use-lite config would not read is refused, not ignored.
+  const CommandResult unread_pieces = run_nec(train + " --pieces " + d / "spm.model" + " --force");
+  EXPECT_EQ(unread_pieces.exit_code, 2) << unread_pieces.output;
+  EXPECT_TRUE(contains(unread_pieces.output, "--pieces is read only by the \"pieces\" text backbone")) << unread_pieces.output;
 }
 
 TEST_F(CliEvaluator, RetrievalEvaluationAndQueries) {
