@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <string_view>
 
@@ -33,11 +34,7 @@ class GraphWeights {
       fail("has no single weightsManifest group");
     }
     const nlohmann::json& group = model["weightsManifest"][0];
-    for (const auto& shard : group.at("paths")) {
-      const std::string path = (fs::path(dir) / shard.get<std::string>()).string();
-      if (!fs::exists(path)) throw InputError(path, 0, std::string("a weight shard is missing; ") + kSentenceEncoderHint);
-      bytes_ += read_file(path);
-    }
+    read_shards(dir, group.at("paths"));
     size_t offset = 0;
     for (const auto& entry : group.at("weights")) {
       Entry weight;
@@ -53,8 +50,8 @@ class GraphWeights {
       offset += static_cast<size_t>(count) * 4;
       entries_[entry.at("name").get<std::string>()] = weight;
     }
-    if (offset != bytes_.size()) {
-      fail("lists " + std::to_string(offset) + " bytes of weights, its shards hold " + std::to_string(bytes_.size()));
+    if (offset != static_cast<size_t>(bytes_.numel())) {
+      fail("lists " + std::to_string(offset) + " bytes of weights, its shards hold " + std::to_string(bytes_.numel()));
     }
   }
 
@@ -63,20 +60,21 @@ class GraphWeights {
     const auto& [name, entry] = find(tail);
     if (entry.dtype != "float32") fail(name + " is not float32");
     if (!shape.empty() && entry.shape != shape) fail(name + " has an unexpected shape");
-    at::Tensor out = torch::empty(entry.shape, torch::kFloat32);
-    std::memcpy(out.data_ptr<float>(), bytes_.data() + entry.offset, static_cast<size_t>(out.numel()) * 4);
-    return out;
+    const int64_t count = c10::multiply_integers(entry.shape);
+    // A view of the shards' bytes (every weight starts at a multiple of 4): the weights are not copied.
+    return bytes_.narrow(0, static_cast<int64_t>(entry.offset), count * 4).view(torch::kFloat32).view(entry.shape);
   }
   double scalar(std::string_view tail) const {
     const auto& [name, entry] = find(tail);
     if (entry.shape.size() > 1 || (entry.shape.size() == 1 && entry.shape[0] != 1)) fail(name + " is not a scalar");
+    const uint8_t* data = bytes_.data_ptr<uint8_t>() + entry.offset;
     if (entry.dtype == "float32") {
       float value;
-      std::memcpy(&value, bytes_.data() + entry.offset, 4);
+      std::memcpy(&value, data, 4);
       return value;
     }
     int32_t value;
-    std::memcpy(&value, bytes_.data() + entry.offset, 4);
+    std::memcpy(&value, data, 4);
     return value;
   }
   bool has(std::string_view tail) const { return !named(tail).empty(); }
@@ -85,6 +83,27 @@ class GraphWeights {
   }
 
  private:
+  // The shards, end to end, read straight into one byte tensor that the weights view.
+  void read_shards(const std::string& dir, const nlohmann::json& shards) {
+    std::vector<std::pair<std::string, int64_t>> sized;
+    int64_t total = 0;
+    for (const auto& shard : shards) {
+      const std::string path = (fs::path(dir) / shard.get<std::string>()).string();
+      std::error_code ec;
+      const auto size = fs::file_size(path, ec);
+      if (ec) throw InputError(path, 0, std::string("a weight shard is missing; ") + kSentenceEncoderHint);
+      sized.emplace_back(path, static_cast<int64_t>(size));
+      total += static_cast<int64_t>(size);
+    }
+    bytes_ = torch::empty({total}, torch::kUInt8);
+    char* out = reinterpret_cast<char*>(bytes_.data_ptr<uint8_t>());
+    for (const auto& [path, size] : sized) {
+      std::ifstream in(path, std::ios::binary);
+      if (!in.read(out, size)) throw InputError(path, 0, "cannot read the weight shard; " + std::string(kSentenceEncoderHint));
+      out += size;
+    }
+  }
+
   struct Entry {
     std::string dtype;
     std::vector<int64_t> shape;
@@ -106,7 +125,7 @@ class GraphWeights {
   }
 
   std::string model_path_;
-  std::string bytes_;
+  at::Tensor bytes_;
   std::map<std::string, Entry> entries_;
 };
 
