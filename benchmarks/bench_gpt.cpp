@@ -89,16 +89,14 @@ struct RandomGpt {
     config.codebook_layers = 4;
     config.codebook_size = 256;
     config.skeleton_dim = 64;
-    config.text.word_dim = 0;
-    config.text.vocab_size = 1000;
     torch::manual_seed(0);
     model = nec::gpt::TokenGpt(config);
     model->eval();
     c10::InferenceMode inference;
+    // The sentence encoder's outputs for a caption of 10 pieces (the config's backbone is use-lite).
     nec::text::TextBatch caption;
-    caption.ids = torch::randint(2, 1000, {1, 10}, torch::kInt64);
-    caption.word_vectors = torch::zeros({1, 10, 0});
-    caption.word_known = torch::zeros({1, 10, 1});
+    caption.encoder_features = torch::randn({1, 10, nec::text::kUseLiteWidth});
+    caption.encoder_sentence = torch::nn::functional::normalize(torch::randn({1, nec::text::kUseLiteWidth}));
     caption.mask = torch::ones({1, 10}, torch::kBool);
     const at::Tensor skeleton = torch::randn({1, nec::gpt::skeleton_feature_width(64)});
     condition = model->condition(caption, skeleton, {});

@@ -7,6 +7,9 @@
 # SPLIT: test (default) or val; SAMPLES per caption (default 1; 2 or more also give Multimodality);
 # CLIPS: at most this many clips of each dataset, evenly spaced in the manifest's order (default: all).
 # NEC_THREADS: threads of each `nec generate` (default 2).
+# NEC_CAPTIONS=TSV (lines: a clip's file name, a tab, a caption; `#` comments): generate from those captions
+# instead, for the listed clips only; each sidecar keeps the clip's own first caption, so the evaluator scores
+# a paraphrase's motion against the caption it rewrites (benchmarks/data/paraphrases.tsv).
 # Writes OUT_DIR/generated/<dataset>/<the source's folder>/*.bvh (+ caption sidecars; the zoo's folders
 # cNNN_<plan> give `nec eval t2m` the body plan), OUT_DIR/t2m.md and OUT_DIR/t2m.json.
 set -euo pipefail
@@ -20,28 +23,49 @@ nec=${NEC:-build/apps/nec}
 threads=${NEC_THREADS:-2}
 mkdir -p "$out/generated"
 started=$SECONDS
-# One line per clip: dataset, source file, seconds, first caption (tab-separated).
-python3 - "$cache/manifest.json" "$split" "$clips" > "$out/clips.tsv" <<'PY'
-import collections, json, sys
+# One line per clip: dataset, source file, seconds, the caption to generate from, the clip's first caption
+# (tab-separated).
+python3 - "$cache/manifest.json" "$split" "$clips" "${NEC_CAPTIONS:-}" > "$out/clips.tsv" <<'PY'
+import collections, json, os, sys
 manifest = json.load(open(sys.argv[1]))
 limit = int(sys.argv[3])
+rewritten = None
+if sys.argv[4]:
+    rewritten = {}
+    for number, line in enumerate(open(sys.argv[4]), 1):
+        if line.strip() and not line.startswith("#"):
+            fields = line.rstrip("\n").split("\t")
+            if len(fields) != 2 or not fields[1].strip():
+                sys.exit(f"{sys.argv[4]}:{number}: expected a file name, a tab and a caption")
+            rewritten[fields[0]] = fields[1]
 by_dataset = collections.defaultdict(list)
 for clip in manifest["clips"]:
     if clip["split"] == sys.argv[2] and clip["captions"]:
-        by_dataset[clip["dataset"]].append(clip)
+        if rewritten is None or os.path.basename(clip["source"]) in rewritten:
+            by_dataset[clip["dataset"]].append(clip)
+if rewritten is not None and not by_dataset:
+    sys.exit(f"{sys.argv[4]}: none of its clips is a captioned {sys.argv[2]} clip of {sys.argv[1]}")
 for dataset, clips in by_dataset.items():
     if 0 < limit < len(clips):
         clips = [clips[i * len(clips) // limit] for i in range(limit)]
     for clip in clips:
-        print("\t".join([dataset, clip["source"], "%.3f" % (clip["frames"] / clip["fps"]), clip["captions"][0]]))
+        own = clip["captions"][0]
+        prompt = rewritten[os.path.basename(clip["source"])] if rewritten is not None else own
+        print("\t".join([dataset, clip["source"], "%.3f" % (clip["frames"] / clip["fps"]), prompt, own]))
 PY
 count=0
-while IFS=$'\t' read -r dataset source seconds caption; do
+while IFS=$'\t' read -r dataset source seconds caption own; do
   count=$((count + 1))
   folder="$out/generated/$dataset/$(basename "$(dirname "$source")")"
   mkdir -p "$folder"
+  name=$(printf %04d "$count")
   "$nec" generate "$caption" --skeleton "$source" --model "$model" --seconds "$seconds" --samples "$samples" \
-    --seed "$count" -o "$folder/$(printf %04d "$count").bvh" --force --threads "$threads" > /dev/null
+    --seed "$count" -o "$folder/$name.bvh" --force --threads "$threads" > /dev/null
+  if [ "$caption" != "$own" ]; then
+    for sidecar in "$folder/$name".txt "$folder/$name"_*.txt; do
+      [ -f "$sidecar" ] && printf '%s\n' "$own" > "$sidecar"
+    done
+  fi
 done < "$out/clips.tsv"
 echo "generated $count clips of the $split split in $((SECONDS - started)) s"
 "$nec" eval t2m --generated "$out/generated" --reference "$cache" --evaluator "$evaluator" --split "$split" \
