@@ -17,7 +17,7 @@ nec=${NEC:-build/apps/nec}
 if [ -n "$tokenizer" ]; then
   mkdir -p "$out/reconstructed"
   count=0
-  while IFS=$'\t' read -r dataset source seconds caption; do
+  while IFS=$'\t' read -r dataset source seconds _; do
     count=$((count + 1))
     case "$source" in *_jump.bvh|*_sit.bvh|*_lie_down.bvh|*_take_off.bvh) ;; *) continue ;; esac
     target="$out/reconstructed/$(printf %04d "$count").bvh"
@@ -41,7 +41,7 @@ def span(path):
 
 clips = [line.rstrip("\n").split("\t") for line in open(os.path.join(out, "clips.tsv"))]
 ratios = {}
-for index, (dataset, source, seconds, caption) in enumerate(clips, 1):
+for index, (dataset, source, *_) in enumerate(clips, 1):
     action = next((a for a in ("jump", "sit", "lie_down", "take_off") if source.endswith("_" + a + ".bvh")), None)
     if action is None:
         continue
