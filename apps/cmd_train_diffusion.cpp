@@ -35,7 +35,7 @@ int run_train_diffusion(int argc, char** argv) {
   cli.epilogue("fields of --config (every one optional; the default after =; the motion stage takes\n"
                "model.* from the pose model and refuses a \"model\" object):\n" +
                train::describe_config(diffusion::DiffusionTrainConfig{}));
-  cli.example("nec train diffusion --stage pose --config configs/diffusion_pose_cpu.json --data cache/ --owo runs/owo --pieces spm.model --out runs/diffusion-pose");
+  cli.example("nec train diffusion --stage pose --config configs/diffusion_pose_cpu.json --data cache/ --owo runs/owo --out runs/diffusion-pose");
   cli.example("nec train diffusion --stage motion --config configs/diffusion_motion_cpu.json --data cache/ --pose runs/diffusion-pose --out runs/diffusion");
   if (!cli.parse(argc, argv)) return 0;
   const std::string stage_name = cli.value("--stage");

@@ -31,7 +31,7 @@ int run_train_gpt(int argc, char** argv) {
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
   declare_training_options(cli);
   cli.epilogue("fields of --config (every one optional; the default after =):\n" + train::describe_config(gpt::GptTrainConfig{}));
-  cli.example("nec train gpt --config configs/gpt_cpu.json --data cache/ --tat runs/tat --pieces spm.model --out runs/gpt");
+  cli.example("nec train gpt --config configs/gpt_cpu.json --data cache/ --tat runs/tat --out runs/gpt");
   cli.example("nec train gpt --config configs/gpt_cpu.json --data cache/ --out runs/gpt --resume --steps 4000");
   if (!cli.parse(argc, argv)) return 0;
   if (const std::optional<int> workers = run_workers_if_asked(cli, "gpt", argc, argv)) return *workers;
