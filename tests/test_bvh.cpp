@@ -215,6 +215,47 @@ TEST(BvhReader, NumbersAreTheCorrectlyRoundedDoubleOfTheirText) {
   }
 }
 
+// Each joint's rotation is the normalized product of its channels' axis rotations, in channel order, bit for
+// bit as rotations.h composes them (the reader skips the product's zero terms).
+TEST(BvhReader, RotationsAreTheProductOfTheChannelsAxisRotations) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> angle(-720.0, 720.0);
+  const std::vector<std::string> orders = {"Xrotation Yrotation Zrotation", "Zrotation Xrotation Yrotation",
+                                           "Yrotation Zrotation Xrotation", "Zrotation Yrotation Xrotation"};
+  std::string bvh = "HIERARCHY\nROOT j0\n{\n  OFFSET 0 0 0\n  CHANNELS 3 " + orders[0] + "\n";
+  for (size_t j = 1; j < orders.size(); ++j) {
+    bvh += "JOINT j" + std::to_string(j) + "\n{\n  OFFSET 0 1 0\n  CHANNELS 3 " + orders[j] + "\n";
+  }
+  bvh += "End Site\n{\n  OFFSET 0 1 0\n}\n";
+  for (size_t j = 0; j < orders.size(); ++j) bvh += "}\n";
+  bvh += "MOTION\nFrames: 50\nFrame Time: 0.0333333\n";
+  std::vector<double> degrees;
+  for (int f = 0; f < 50; ++f) {
+    for (size_t v = 0; v < 3 * orders.size(); ++v) {
+      char text[32];
+      const auto [end, ec] = std::to_chars(text, text + sizeof text, angle(rng));
+      bvh += std::string(text, end) + " ";
+      double parsed = 0.0;
+      std::from_chars(text, end, parsed);
+      degrees.push_back(parsed);
+    }
+    bvh += "\n";
+  }
+  const Clip clip = parse_bvh(bvh, "angles.bvh");
+  const std::vector<std::array<int, 3>> axes = {{0, 1, 2}, {2, 0, 1}, {1, 2, 0}, {2, 1, 0}};
+  for (int f = 0; f < 50; ++f) {
+    for (int j = 0; j < 4; ++j) {
+      const double* d = &degrees[static_cast<size_t>(f * 12 + j * 3)];
+      const Quat expected = (axis_rotation(axes[j][0], d[0]) * axis_rotation(axes[j][1], d[1]) *
+                             axis_rotation(axes[j][2], d[2])).normalized();
+      const Quat got = clip.motion.rotation(f, j);
+      for (int k = 0; k < 4; ++k) {
+        ASSERT_EQ(got.coeffs()[k], expected.coeffs()[k]) << "frame " << f << " joint " << j << " coefficient " << k;
+      }
+    }
+  }
+}
+
 TEST(BvhReader, IgnoresLinesAfterTheDeclaredFramesWithAWarning) {
   const Clip clip = parse_bvh(with_motion("MOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0 0 0 0 0 0 0\n1 1 1 1 1 1 1 1 1\n"),
                               "extra.bvh");

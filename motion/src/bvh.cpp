@@ -27,27 +27,65 @@ std::string excerpt(std::string_view text) {
   return out;
 }
 
+// The value of eight decimal digits in the bytes of `chunk`, the first in its lowest byte (as little-endian
+// memory holds text): neighbouring digits are joined into pairs, pairs into fours, fours into the eight, each
+// step with one multiply across the whole word (no lane overflows into the next).
+uint64_t eight_digits(uint64_t chunk) {
+  const uint64_t digits = chunk & 0x0F0F0F0F0F0F0F0FULL;
+  const uint64_t pairs = (digits & 0x00FF00FF00FF00FFULL) * 10 + ((digits >> 8) & 0x00FF00FF00FF00FFULL);
+  const uint64_t fours = (pairs & 0x0000FFFF0000FFFFULL) * 100 + ((pairs >> 16) & 0x0000FFFF0000FFFFULL);
+  return (fours & 0xFFFFFFFFULL) * 10000 + (fours >> 32);
+}
+
+// Reads the decimal digits at `p` into `value` (value * 10^n + their value) and adds their count to `digits`;
+// returns the position after them. Eight bytes at a time where the text has them (little-endian machines),
+// while the count stays within 19 digits; past that the value wraps and the caller rejects the number.
+const char* read_digits(const char* p, const char* last, uint64_t& value, int& digits) {
+  static constexpr uint64_t kPowers[] = {1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000};
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  while (last - p >= 8 && digits <= 11) {
+    uint64_t chunk = 0;
+    std::memcpy(&chunk, p, 8);
+    // A byte is a digit when its high nibble is 3 and adding 6 keeps it so; a carry from a non-digit byte
+    // reaches only bytes after it.
+    const uint64_t not_digit = ((chunk & 0xF0F0F0F0F0F0F0F0ULL) ^ 0x3030303030303030ULL) |
+                               (((chunk + 0x0606060606060606ULL) & 0xF0F0F0F0F0F0F0F0ULL) ^ 0x3030303030303030ULL);
+    const int count = not_digit == 0 ? 8 : __builtin_ctzll(not_digit) / 8;
+    if (count == 0) return p;
+    value = value * kPowers[count] + eight_digits(chunk << (8 * (8 - count)));  // leading zero digits below
+    digits += count;
+    p += count;
+    if (count < 8) return p;
+  }
+#endif
+  for (; p != last && static_cast<unsigned>(*p - '0') < 10; ++p, ++digits) value = value * 10 + (*p - '0');
+  return p;
+}
+
 // A plain decimal ("-12.3456", at most 19 digits, no exponent) whose digits as an integer w are at most 2^53
 // and that has at most 22 digits after the point is w / 10^k with both operands exact doubles, so one IEEE
 // division gives the correctly rounded value: the same double std::from_chars returns (Clinger's fast path).
-// Motion lines are almost all such numbers; anything else returns false and goes to std::from_chars.
-bool parse_plain_decimal(const char* first, const char* last, double& value) {
+// Reads one at `first` and returns the position after it, or nullptr when the text there is none of those.
+// The caller checks that the number ends where its token does ("1.5e3" stops at the 'e'). Motion lines are
+// almost all such numbers; anything else goes to std::from_chars.
+const char* scan_plain_decimal(const char* first, const char* last, double& value) {
   static constexpr double kPowersOfTen[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
                                             1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
   const bool negative = first != last && *first == '-';
   const char* p = first + (negative ? 1 : 0);
   uint64_t digits_value = 0;
-  int digits = 0, fraction = 0;
-  for (; p != last && static_cast<unsigned>(*p - '0') < 10; ++p, ++digits) digits_value = digits_value * 10 + (*p - '0');
+  int digits = 0;
+  p = read_digits(p, last, digits_value, digits);
+  int fraction = 0;
   if (p != last && *p == '.') {
-    for (++p; p != last && static_cast<unsigned>(*p - '0') < 10; ++p, ++digits, ++fraction) {
-      digits_value = digits_value * 10 + (*p - '0');
-    }
+    const int integer_digits = digits;
+    p = read_digits(p + 1, last, digits_value, digits);
+    fraction = digits - integer_digits;
   }
-  if (p != last || digits == 0 || digits > 19 || digits_value > (uint64_t{1} << 53) || fraction > 22) return false;
+  if (digits == 0 || digits > 19 || digits_value > (uint64_t{1} << 53) || fraction > 22) return nullptr;
   const double magnitude = static_cast<double>(digits_value) / kPowersOfTen[fraction];
   value = negative ? -magnitude : magnitude;
-  return true;
+  return p;
 }
 
 // Parses one finite number that must fill `token` exactly; false otherwise.
@@ -56,7 +94,7 @@ bool parse_double(std::string_view token, double& value) {
   const char* last = first + token.size();
   if (first != last && *first == '+') ++first;
   if (first == last) return false;
-  if (parse_plain_decimal(first, last, value)) return true;
+  if (scan_plain_decimal(first, last, value) == last) return true;
   const auto [ptr, ec] = std::from_chars(first, last, value);
   return ec == std::errc() && ptr == last && std::isfinite(value);
 }
@@ -243,6 +281,20 @@ class HierarchyParser {
   Skeleton skeleton_;
 };
 
+// rotation * axis_rotation(axis, degrees) without the general product's terms that are zero (the same
+// value: a product with an exact zero adds nothing to the rounding).
+void turn_about_axis(Quat& rotation, int axis, double degrees) {
+  const double half = 0.5 * degrees / kDegreesPerRadian;
+  const double s = std::sin(half), c = std::cos(half);
+  double* q = rotation.coeffs().data();  // x, y, z, w
+  const int next = (axis + 1) % 3, last = (axis + 2) % 3;
+  const double w = q[3], along = q[axis], b = q[next], d = q[last];
+  q[3] = w * c - along * s;
+  q[axis] = along * c + w * s;
+  q[next] = b * c + d * s;
+  q[last] = d * c - b * s;
+}
+
 // Applies one frame of channel values to the motion.
 void decode_frame(const Skeleton& skeleton, const double* values, int frame, Motion& motion) {
   for (int j = 0; j < skeleton.joint_count(); ++j) {
@@ -255,7 +307,7 @@ void decode_frame(const Skeleton& skeleton, const double* values, int frame, Mot
       if (is_position(channel)) {
         translation[channel_axis(channel)] = value;
       } else {
-        rotation = rotation * axis_rotation(channel_axis(channel), value);
+        turn_about_axis(rotation, channel_axis(channel), value);
       }
     }
     motion.rotation(frame, j) = rotation.normalized();
@@ -326,15 +378,21 @@ class MotionParser {
       while (true) {
         while (p < end && is_blank(*p)) ++p;
         if (p >= end || *p == '\n') break;
-        const char* start = p;
-        while (p < end && !is_blank(*p) && *p != '\n') ++p;
-        const std::string_view token(start, static_cast<size_t>(p - start));
         if (count == channel_count) {
           throw InputError(lex_.name(), line, "frame " + std::to_string(frame) + " has more than " +
                                                   std::to_string(channel_count) + " values");
         }
-        if (!parse_double(token, values[count])) {
-          throw InputError(lex_.name(), line, "bad number '" + excerpt(token) + "' in frame " + std::to_string(frame));
+        // A plain decimal is read in the pass that finds its end; any other token is cut out and parsed whole.
+        const char* after = scan_plain_decimal(p, end, values[count]);
+        if (after != nullptr && (after == end || is_blank(*after) || *after == '\n')) {
+          p = after;
+        } else {
+          const char* start = p;
+          while (p < end && !is_blank(*p) && *p != '\n') ++p;
+          const std::string_view token(start, static_cast<size_t>(p - start));
+          if (!parse_double(token, values[count])) {
+            throw InputError(lex_.name(), line, "bad number '" + excerpt(token) + "' in frame " + std::to_string(frame));
+          }
         }
         ++count;
       }
