@@ -44,8 +44,6 @@ struct RandomDenoiser {
     nec::diffusion::DenoiserConfig config =
         nec::diffusion::read_diffusion_train_config(std::string(NEC_SOURCE_DIR) + "/configs/diffusion_pose_cpu.json").model;
     config.skeleton_dim = 64;
-    config.text.word_dim = 0;
-    config.text.vocab_size = 1000;
     torch::manual_seed(0);
     model = nec::diffusion::MotionDenoiser(config);
     torch::NoGradGuard no_grad;

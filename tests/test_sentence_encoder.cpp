@@ -109,7 +109,9 @@ TEST(SentenceEncoder, FeaturesAndMaskFollowThePieces) {
   // A long sentence is cut to the graph's 128 pieces, as the runner's graph does.
   std::string many;
   for (int i = 0; i < 200; ++i) many += "dog ";
-  EXPECT_EQ(encoder()->tokenize({many})[0].size(), 128u);
+  const SentenceEncoding cut = encoder()->encode({many});
+  EXPECT_EQ(cut.mask.size(1), 128);
+  EXPECT_TRUE(cut.mask.all().item<bool>());
 }
 
 TEST(SentenceEncoder, AnEmptySentenceIsRefused) {

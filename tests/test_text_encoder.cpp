@@ -319,6 +319,36 @@ TEST_F(UseLiteTextEncoderTest, WithNoLayersTheSentenceVectorIsTheOnlyPieceAndLon
   EXPECT_GT((out.sentence[0] - out.sentence[1]).abs().max().item<double>(), 1e-3);
 }
 
+TEST_F(UseLiteTextEncoderTest, PieceMemoryMapsEachPieceAloneAndKeepsTheSentenceHead) {
+  config_.layers = 0;
+  config_.piece_memory = true;
+  const text::CaptionReader reader = text::CaptionReader::for_training(config_, "");
+  torch::manual_seed(1);
+  TextEncoder encoder(config_);
+  encoder->eval();
+  torch::NoGradGuard no_grad;
+  const TextBatch batch = reader.read({"a dog walks", "a spider crawls quickly to the left"}, nullptr, "query");
+  const text::TextEncoding out = encoder->forward(batch);
+  const int64_t pieces = batch.mask.size(1);
+  ASSERT_EQ(out.features.sizes(), (std::vector<int64_t>{2, pieces, 32}));
+  EXPECT_TRUE(torch::equal(out.mask, batch.mask));
+  // Each piece's features depend on that piece's encoder features alone: changing the last piece of the
+  // long caption changes only its row.
+  TextBatch changed = batch;
+  changed.encoder_features = batch.encoder_features.clone();
+  changed.encoder_features[1][pieces - 1] += 1.0;
+  const text::TextEncoding moved = encoder->forward(changed);
+  EXPECT_TRUE(torch::equal(moved.features.narrow(1, 0, pieces - 1), out.features.narrow(1, 0, pieces - 1)));
+  EXPECT_GT((moved.features[1][pieces - 1] - out.features[1][pieces - 1]).abs().max().item<double>(), 1e-3);
+  // The sentence vector is the sentence head's, as without piece_memory.
+  EXPECT_TRUE(torch::equal(moved.sentence, out.sentence));
+  config_.layers = 2;
+  EXPECT_THROW(config_.validate(), std::invalid_argument);
+  // Captions longer than max_pieces are refused, as the per-piece features are read.
+  EXPECT_THROW(reader.read({"a dog walks forward then a spider crawls to the left then a snake turns around"}, nullptr, "q"),
+               InputError);
+}
+
 TEST_F(UseLiteTextEncoderTest, PieceDropoutZeroesFeaturesOnlyInTraining) {
   config_.piece_dropout = 0.5;
   config_.dropout = 0.0;

@@ -195,16 +195,11 @@ SentenceEncoderImpl::SentenceEncoderImpl(const std::string& dir)
   pool_bias_ = register_buffer("pool_bias", graph.tensor("/hidden_layers/tanh_layer_0/bias", {dim_}));
 }
 
-std::vector<std::vector<int>> SentenceEncoderImpl::tokenize(const std::vector<std::string>& sentences) const {
-  std::vector<std::vector<int>> out;
-  out.reserve(sentences.size());
-  for (size_t i = 0; i < sentences.size(); ++i) {
-    std::vector<int> ids = pieces_.encode(sentences[i]);
-    if (ids.empty()) throw InputError("sentence " + std::to_string(i + 1) + " is empty: the sentence encoder needs text");
-    if (static_cast<int64_t>(ids.size()) > max_pieces_) ids.resize(static_cast<size_t>(max_pieces_));
-    out.push_back(std::move(ids));
+void SentenceEncoderImpl::cut_pieces(std::vector<std::vector<int>>& pieces) const {
+  for (size_t i = 0; i < pieces.size(); ++i) {
+    if (pieces[i].empty()) throw InputError("sentence " + std::to_string(i + 1) + " is empty: the sentence encoder needs text");
+    if (static_cast<int64_t>(pieces[i].size()) > max_pieces_) pieces[i].resize(static_cast<size_t>(max_pieces_));
   }
-  return out;
 }
 
 SentenceEncoding SentenceEncoderImpl::forward(const at::Tensor& ids, const at::Tensor& mask) const {
@@ -244,7 +239,14 @@ SentenceEncoding SentenceEncoderImpl::forward(const at::Tensor& ids, const at::T
 }
 
 SentenceEncoding SentenceEncoderImpl::encode(const std::vector<std::string>& sentences) const {
-  const std::vector<std::vector<int>> pieces = tokenize(sentences);
+  std::vector<std::vector<int>> pieces;
+  pieces.reserve(sentences.size());
+  for (const std::string& sentence : sentences) pieces.push_back(pieces_.encode(sentence));
+  return encode_pieces(std::move(pieces));
+}
+
+SentenceEncoding SentenceEncoderImpl::encode_pieces(std::vector<std::vector<int>> pieces) const {
+  cut_pieces(pieces);
   size_t longest = 0;
   for (const auto& ids : pieces) longest = std::max(longest, ids.size());
   const int64_t batch = static_cast<int64_t>(pieces.size()), length = static_cast<int64_t>(longest);

@@ -27,7 +27,7 @@ int64_t piece_width(const TextEncoderConfig& c) { return c.word_dim > 0 ? c.word
 
 bool reads_pieces(const TextEncoderConfig& c) { return c.backbone == kPiecesBackbone; }
 // Whether the transformer reads a token per piece (max_pieces bounds the caption), or only the sentence vector.
-bool reads_each_piece(const TextEncoderConfig& c) { return reads_pieces(c) || c.layers > 0; }
+bool reads_each_piece(const TextEncoderConfig& c) { return reads_pieces(c) || c.layers > 0 || c.piece_memory; }
 
 constexpr const char* kPieceFile = "pieces.model";
 
@@ -60,6 +60,7 @@ void TextEncoderConfig::validate() const {
   require(max_pieces >= 1, "max_pieces must be >= 1");
   require(dropout >= 0 && dropout < 1, "dropout must be in [0, 1)");
   require(piece_dropout >= 0 && piece_dropout < 1, "piece_dropout must be in [0, 1)");
+  require(!piece_memory || (!reads_pieces(*this) && layers == 0), "piece_memory needs the use-lite backbone and 0 layers");
 }
 
 void visit_fields(train::ConfigVisitor& v, TextEncoderConfig& c) {
@@ -79,6 +80,8 @@ void visit_fields(train::ConfigVisitor& v, TextEncoderConfig& c) {
           "chance a piece id is read as unknown in training, so that the word vectors are read too");
   v.added_field("read_split_words_by_vector", c.read_split_words_by_vector,
           "a word with a vector that the piece model cuts into several pieces is read from its vector alone");
+  v.added_field("piece_memory", c.piece_memory,
+                "use-lite, 0 layers: each piece's encoder features through one linear map are the per-piece features");
 }
 
 TextBatch TextBatch::to(const c10::Device& device) const {
@@ -141,16 +144,14 @@ TextBatch make_sentence_batch(const std::vector<std::string>& captions, const Se
     throw std::invalid_argument("make_sentence_batch: the sentence encoder is " + std::to_string(encoder.dim()) +
                                 " wide, the text encoder reads " + std::to_string(kUseLiteWidth));
   }
-  std::vector<std::string> normalized;
-  normalized.reserve(captions.size());
+  std::vector<std::vector<int>> pieces;
+  pieces.reserve(captions.size());
   for (size_t i = 0; i < captions.size(); ++i) {
     const std::string name = caption_name(where, i, captions.size());
-    normalized.push_back(checked_caption(captions[i], name));
-    if (reads_each_piece(config)) {
-      check_piece_count(static_cast<int64_t>(encoder.pieces().encode(normalized.back()).size()), config, name, captions[i]);
-    }
+    pieces.push_back(encoder.pieces().encode(checked_caption(captions[i], name)));
+    check_piece_count(static_cast<int64_t>(pieces.back().size()), config, name, captions[i]);
   }
-  const SentenceEncoding encoded = encoder.encode(normalized);
+  const SentenceEncoding encoded = encoder.encode_pieces(std::move(pieces));
   TextBatch batch;
   batch.encoder_features = encoded.features;
   batch.encoder_sentence = encoded.sentence;
@@ -245,6 +246,7 @@ TextEncoderImpl::TextEncoderImpl(const TextEncoderConfig& config) : config_(conf
     if (config_.layers > 0) {
       encoder_sentence_ = register_module("encoder_sentence", torch::nn::Linear(kUseLiteWidth, config_.output_dim));
     }
+    if (config_.piece_memory) piece_map_ = register_module("piece_map", torch::nn::Linear(kUseLiteWidth, config_.dim));
   }
   if (config_.layers > 0) {
     positions_ = register_parameter("positions", torch::randn({config_.max_pieces, config_.dim}) * 0.02);
@@ -274,16 +276,16 @@ int64_t TextEncoderImpl::init_piece_embeddings(const PieceModel& pieces, const W
   return initialised;
 }
 
+at::Tensor TextEncoderImpl::dropped_encoder_features(const TextBatch& batch) {
+  const at::Tensor& features = batch.encoder_features;
+  if (!is_training() || config_.piece_dropout == 0) return features;
+  const at::Tensor kept = torch::rand({features.size(0), features.size(1), 1}, features.options()) >= config_.piece_dropout;
+  return features * kept.to(features.scalar_type());
+}
+
 at::Tensor TextEncoderImpl::input_tokens(const TextBatch& batch) {
+  if (!reads_pieces(config_)) return input_(dropped_encoder_features(batch));
   const bool dropping = is_training() && config_.piece_dropout > 0;
-  if (!reads_pieces(config_)) {
-    at::Tensor features = batch.encoder_features;
-    if (dropping) {
-      const at::Tensor kept = torch::rand({features.size(0), features.size(1), 1}, features.options()) >= config_.piece_dropout;
-      features = features * kept.to(features.scalar_type());
-    }
-    return input_(features);
-  }
   at::Tensor ids = batch.ids;
   if (dropping) {
     const at::Tensor dropped = torch::rand(ids.sizes(), torch::TensorOptions().device(ids.device())) < config_.piece_dropout;
@@ -297,12 +299,17 @@ at::Tensor TextEncoderImpl::input_tokens(const TextBatch& batch) {
 
 TextEncoding TextEncoderImpl::forward(const TextBatch& batch) {
   TextEncoding out;
-  if (!reads_each_piece(config_)) {  // use-lite with no layers: the sentence vector through one hidden layer
+  if (config_.layers == 0) {  // use-lite with no layers: the sentence vector through one hidden layer
     const at::Tensor hidden =
         torch::gelu(input_(torch::dropout(batch.encoder_sentence, config_.dropout, is_training())));
-    out.features = hidden.unsqueeze(1);
-    out.mask = torch::ones({hidden.size(0), 1}, hidden.options().dtype(torch::kBool));
     out.sentence = sentence_(hidden);
+    if (config_.piece_memory) {
+      out.features = piece_map_(dropped_encoder_features(batch));
+      out.mask = batch.mask;
+    } else {
+      out.features = hidden.unsqueeze(1);
+      out.mask = torch::ones({hidden.size(0), 1}, hidden.options().dtype(torch::kBool));
+    }
     return out;
   }
   const int64_t pieces = batch.mask.size(1);

@@ -67,15 +67,19 @@ class SentenceEncoderImpl : public torch::nn::Module {
   int64_t max_pieces() const { return max_pieces_; }
   const std::vector<SentenceEncoderLayer>& layers() const { return layers_; }
 
-  // The pieces of each sentence, cut to max_pieces(). InputError naming the
-  // sentence's position for an empty one.
-  std::vector<std::vector<int>> tokenize(const std::vector<std::string>& sentences) const;
   // ids (B, P) int64 (any value at padding), mask (B, P) bool with every row's pieces first.
   SentenceEncoding forward(const at::Tensor& ids, const at::Tensor& mask) const;
-  // tokenize, then forward on this module's device, without gradients.
+  // Each sentence's pieces, then encode_pieces.
   SentenceEncoding encode(const std::vector<std::string>& sentences) const;
+  // forward on pieces already cut (each row as pieces().encode gives it; cut
+  // to max_pieces() here), on this module's device, without gradients.
+  // InputError naming the sentence's position for an empty row.
+  SentenceEncoding encode_pieces(std::vector<std::vector<int>> pieces) const;
 
  private:
+  // Cuts each row to max_pieces(); InputError for an empty one.
+  void cut_pieces(std::vector<std::vector<int>>& pieces) const;
+
   SentencePieces pieces_;
   int64_t dim_ = 0;
   int64_t max_pieces_ = 0;

@@ -12,9 +12,10 @@
 // (text/sentence_encoder.h), frozen, under a small trainable head. Why: words
 // no caption of the corpus used ("pup", "greets") land near the words it did,
 // as the pretrained encoder learnt from far more English than our captions.
-// With layers = 0 the head reads the encoder's sentence vector alone: one
-// GELU hidden layer of width dim (the single "piece" of features) and a
-// linear map to the sentence vector. With layers > 0 a transformer reads the
+// With layers = 0 the head reads the encoder's sentence vector: one GELU
+// hidden layer of width dim (the single "piece" of features, or with
+// piece_memory each piece's features through one linear map) and a linear map
+// to the sentence vector. With layers > 0 a transformer reads the
 // encoder's per-piece features and the sentence vector adds a linear map of
 // the encoder's own; trained on template captions it learns the pieces
 // themselves and reads new words worse (docs/text.md has the measurements).
@@ -84,6 +85,11 @@ struct TextEncoderConfig {
   // the unknown piece for each of them, so that it is read from its vector
   // alone, as piece dropout trained, and not from pieces learnt for other words.
   bool read_split_words_by_vector = false;
+  // use-lite, 0 layers: each piece's encoder features through one linear map
+  // are the per-piece features, beside the sentence vector's hidden layer (no
+  // trained transformer over the pieces, so that a model attending to them
+  // reads words the encoder knows and the captions never used).
+  bool piece_memory = false;
 
   // Throws std::invalid_argument naming the bad field.
   void validate() const;
@@ -170,6 +176,7 @@ CaptionReader load_checkpoint_captions(const std::string& dir, const nlohmann::j
 struct TextEncoding {
   at::Tensor sentence;  // (B, output_dim) pooled sentence vector
   at::Tensor features;  // (B, P, dim) per-piece features (after the final LayerNorm); P = 1 with use-lite, 0 layers
+                        // (without piece_memory)
   at::Tensor mask;      // (B, P) bool
 };
 
@@ -187,6 +194,7 @@ class TextEncoderImpl : public torch::nn::Module {
 
  private:
   at::Tensor input_tokens(const TextBatch& batch);  // (B, P, dim) before the positions
+  at::Tensor dropped_encoder_features(const TextBatch& batch);  // use-lite: piece dropout in training
 
   TextEncoderConfig config_;
   torch::nn::Embedding piece_embedding_{nullptr};  // pieces: (vocab, word_dim or dim)
@@ -195,6 +203,7 @@ class TextEncoderImpl : public torch::nn::Module {
   std::shared_ptr<layers::TransformerStackImpl> transformer_;
   torch::nn::Linear sentence_{nullptr};            // dim -> output_dim
   torch::nn::Linear encoder_sentence_{nullptr};    // use-lite: the encoder's sentence vector -> output_dim
+  torch::nn::Linear piece_map_{nullptr};           // use-lite, piece_memory: features -> dim
 };
 TORCH_MODULE(TextEncoder);
 
