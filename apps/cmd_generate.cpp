@@ -188,7 +188,8 @@ int run_generate(int argc, char** argv) {
     codes = gpt::generate_codes(*gpt_session, *target, segments, samples, gpt_sampling);
     write_sample = [&](int i) {
       const tat::TokenFile tokens = gpt_session->token_file(codes[static_cast<size_t>(i)], caption);
-      tat::decode_onto(gpt_session->tokenizer, tokens, cli.value("--skeleton"), up, corrections, outputs[static_cast<size_t>(i)]);
+      tat::decode_onto(gpt_session->tokenizer, tokens, *target, cli.value("--skeleton"), corrections,
+                      outputs[static_cast<size_t>(i)]);
       return tokens.frames;
     };
   }

@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -45,10 +47,7 @@ void print_overview() {
              "exit codes: 0 ok, 1 bad input, 2 usage error\n");
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  nec::train::keep_large_allocations_in_heap();
+int run_command(int argc, char** argv) {
   nec::assets::register_asset_formats();  // every command reads FBX / glTF / Collada / .x as well as BVH
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
     print_overview();
@@ -73,4 +72,15 @@ int main(int argc, char** argv) {
   fmt::print(stderr, "nec: unknown command '{}'\n\n", name);
   print_overview();
   return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  nec::train::keep_large_allocations_in_heap();
+  const int code = run_command(argc, argv);
+  // Every command has closed its outputs by now. Leaving without the static destructors of libtorch and
+  // the libraries it loads, or freeing the models, saves about 80 ms of a 1-s command.
+  std::fflush(nullptr);
+  std::_Exit(code);
 }

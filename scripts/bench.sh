@@ -28,6 +28,13 @@
 #       factorized attention against full spatio-temporal attention for
 #       J = 20, 60, 140 joints and T = 60, 120, 240 frames. About 10 minutes.
 #       OpenMP's default wait policy (as nec runs) unless OMP_WAIT_POLICY is set.
+#   scripts/bench.sh process
+#       Commands as a user runs them, start to exit, median of 5 with a warm file
+#       cache, and their peak RSS (benchmarks/process_times.py): nec generate with
+#       the default GPT and with the default diffusion model (4-s motion onto the
+#       31-joint CMU rig; goals <= 0.5 s and <= 2 s), nec retrieve on a built
+#       index (goal <= 0.5 s), beside a program that only loads LibTorch
+#       (benchmarks/torch_floor.cpp): the start-up no change inside nec removes.
 #   scripts/bench.sh assets
 #       Rigged assets: reading FBX and GLB (assimp) against reading BVH, on the
 #       Debian CMU files and a zoo dragon exported by Blender 3.4
@@ -35,14 +42,14 @@
 #       MB/s; and writing a motion onto an asset as GLB (ms).
 # Raw results in build-bench/: bench_motion.json, peer_threejs.json,
 # bench_tat_step{1,2}.json, peer_tat_step{1,2}.json, bench_tat_clip.json, bench_evaluator.json, bench_gpt.json,
-# bench_diffusion.json, bench_assets.json
+# bench_diffusion.json, bench_assets.json, process_times.json
 # (NEC_BENCH_BUILD=DIR builds and writes in DIR instead).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 section=all
 case "${1:-}" in
-  motion | tat | evaluator | gpt | diffusion | assets) section=$1; shift ;;
+  motion | tat | evaluator | gpt | diffusion | process | assets) section=$1; shift ;;
 esac
 if [ "$section" != motion ] && [ "$section" != all ] && [ $# -gt 0 ]; then
   echo "bench.sh: '$section' takes no arguments" >&2
@@ -306,6 +313,24 @@ print()
 PY
 }
 
+bench_process() {
+  ensure_packages bench assimp-testmodels
+  cmake --build "$build" --target nec torch_floor
+  local nec="$build"/apps/nec data="$build"/process_data
+  local rig=/usr/share/assimp/models/BVH/01_01.bvh
+  rm -rf "$data"
+  mkdir -p "$data"
+  "$nec" zoo --out "$data"/zoo --creatures 12 --clips-per-creature 4 --seed 1 --quiet >/dev/null
+  "$nec" prepare zoo="$data"/zoo -o "$data"/cache --quiet >/dev/null
+  "$python" benchmarks/process_times.py --repeat 5 --json "$build"/process_times.json \
+    --run "a program that only loads LibTorch (the floor)" "$build/benchmarks/torch_floor" \
+    --run "nec generate, default GPT, 4-s motion, 31-joint CMU rig (goal <= 0.5 s)" \
+    "$nec generate 'a person waves' --skeleton $rig --seconds 4 -o $data/gpt.bvh --force" \
+    --run "nec generate, default diffusion model, 50 steps, the same (goal <= 2 s)" \
+    "$nec generate 'a person waves' --skeleton $rig --seconds 4 --model models/default/diffusion -o $data/diffusion.bvh --force" \
+    --run "nec retrieve, 48-clip index built (goal <= 0.5 s)" "$nec retrieve 'a dog walks forward' --db $data/cache"
+}
+
 bench_assets() {
   ensure_packages bench blender assimp-testmodels
   cmake --build "$build" --target bench_assets nec
@@ -353,5 +378,6 @@ case "$section" in
   evaluator) bench_evaluator ;;
   gpt) bench_gpt ;;
   diffusion) bench_diffusion ;;
-  all) bench_motion "$@"; bench_tat; bench_evaluator; bench_gpt; bench_diffusion ;;
+  process) bench_process ;;
+  all) bench_motion "$@"; bench_tat; bench_evaluator; bench_gpt; bench_diffusion; bench_process ;;
 esac

@@ -114,6 +114,32 @@ TEST(SentenceEncoder, FeaturesAndMaskFollowThePieces) {
   EXPECT_TRUE(cut.mask.all().item<bool>());
 }
 
+// The package's shards fill whole pages and are mapped; the same weights cut into shards of odd sizes are
+// read instead, and must give the same sentences bit for bit.
+TEST(SentenceEncoder, ShardsOfAnySizeHoldTheSameWeights) {
+  const TempDir dir;
+  const std::string source = default_sentence_encoder_dir();
+  fs::copy_file(source + "/vocab.json", dir / "vocab.json");
+  nlohmann::json model = nlohmann::json::parse(read_file(source + "/model.json"));
+  std::string weights;
+  for (const auto& shard : model["weightsManifest"][0]["paths"]) weights += read_file(source + "/" + shard.get<std::string>());
+  const size_t cut[] = {0, 4097, 4097 + 3 * 1000 * 1000 + 6, weights.size()};
+  nlohmann::json paths = nlohmann::json::array();
+  for (int i = 0; i < 3; ++i) {
+    const std::string name = "odd-shard" + std::to_string(i + 1);
+    write_file_atomic(dir / name, weights.substr(cut[i], cut[i + 1] - cut[i]));
+    paths.push_back(name);
+  }
+  model["weightsManifest"][0]["paths"] = paths;
+  write_file_atomic(dir / "model.json", model.dump());
+  const SentenceEncoder read_in(dir.path().string());
+  const std::vector<std::string> texts = {"a dog trots to the left", "somebody greets the crowd"};
+  const SentenceEncoding expected = encoder()->encode(texts);
+  const SentenceEncoding got = read_in->encode(texts);
+  EXPECT_TRUE(torch::equal(got.sentence, expected.sentence));
+  EXPECT_TRUE(torch::equal(got.features, expected.features));
+}
+
 TEST(SentenceEncoder, AnEmptySentenceIsRefused) {
   try {
     encoder()->encode({"a dog", ""});

@@ -100,6 +100,13 @@ std::string animation_name(const TokenFile& tokens) {
 
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path,
                          UpAxis up, const DecodeCorrections& corrections, const std::string& out_path) {
+  return decode_onto(session, tokens, prepare_for_model(target_path, session.model.info.fps, up), target_path,
+                     corrections, out_path);
+}
+
+DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const PreparedClip& target,
+                         const std::string& target_path, const DecodeCorrections& corrections,
+                         const std::string& out_path) {
   const TatConfig& config = session.model.tokenizer->config();
   if (tokens.layers > config.quantizer.layers || tokens.codebook_size != config.quantizer.codebook_size ||
       tokens.downsampling != config.downsampling()) {
@@ -109,7 +116,6 @@ DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, con
                                  tokens.layers, tokens.codebook_size, tokens.downsampling, config.quantizer.layers,
                                  config.quantizer.codebook_size, config.downsampling()));
   }
-  const PreparedClip target = prepare_for_model(target_path, session.model.info.fps, up);
   const Skeleton& skeleton = target.clip.skeleton;
   const at::Tensor codes =
       torch::from_blob(const_cast<int32_t*>(tokens.codes.data()), {tokens.steps(), tokens.layers}, torch::kInt32)

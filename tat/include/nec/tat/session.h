@@ -78,6 +78,11 @@ struct DecodeReport {
 // tokens do not fit the model or the output cannot be written onto the target.
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path, UpAxis up,
                          const DecodeCorrections& corrections, const std::string& out_path);
+// The same onto `target`, the clip of `target_path` already prepared for the model (prepare_for_model at the
+// model's fps): a command writing several motions onto one skeleton reads it once.
+DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const PreparedClip& target,
+                         const std::string& target_path, const DecodeCorrections& corrections,
+                         const std::string& out_path);
 
 // What decode_onto does after decoding, for Θ from any model (e.g. a
 // diffusion model's motion): `features` on `target` (the clip of
