@@ -13,10 +13,6 @@ std::string_view channel_name(Channel channel) {
   return kNames[static_cast<int>(channel)];
 }
 
-bool is_position(Channel channel) { return static_cast<int>(channel) < 3; }
-
-int channel_axis(Channel channel) { return static_cast<int>(channel) % 3; }
-
 namespace {
 Channel rotation_channel(int axis) { return static_cast<Channel>(3 + axis); }
 Channel position_channel(int axis) { return static_cast<Channel>(axis); }

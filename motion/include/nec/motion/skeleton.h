@@ -19,8 +19,8 @@ namespace nec {
 enum class Channel : unsigned char { Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation };
 
 std::string_view channel_name(Channel channel);
-bool is_position(Channel channel);
-int channel_axis(Channel channel);  // 0 = X, 1 = Y, 2 = Z
+inline bool is_position(Channel channel) { return static_cast<int>(channel) < 3; }
+inline int channel_axis(Channel channel) { return static_cast<int>(channel) % 3; }  // 0 = X, 1 = Y, 2 = Z
 
 // The channels of one joint in file order (0 to 6 channels, each at most once).
 struct ChannelLayout {
