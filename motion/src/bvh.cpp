@@ -281,6 +281,23 @@ class HierarchyParser {
   Skeleton skeleton_;
 };
 
+// The Taylor coefficients after the first one or two terms, highest power first: sine's from x^17 down to x^3
+// (divided by x), cosine's from x^16 down to x^2.
+constexpr double kSineTerms[] = {1.0 / 355687428096000.0, -1.0 / 1307674368000.0, 1.0 / 6227020800.0,
+                                 -1.0 / 39916800.0,       1.0 / 362880.0,          -1.0 / 5040.0,
+                                 1.0 / 120.0,             -1.0 / 6.0};
+constexpr double kCosineTerms[] = {1.0 / 20922789888000.0, -1.0 / 87178291200.0, 1.0 / 479001600.0,
+                                   -1.0 / 3628800.0,       1.0 / 40320.0,        -1.0 / 720.0,
+                                   1.0 / 24.0,             -0.5};
+
+// Horner's rule in x^2 over `terms`.
+template <size_t N>
+double taylor_series(const double (&terms)[N], double r2) {
+  double sum = terms[0];
+  for (size_t i = 1; i < N; ++i) sum = sum * r2 + terms[i];
+  return sum;
+}
+
 // sin and cos of half of `degrees`, within 2 ulp of the exact values: reduced exactly in degrees to at most 45
 // from the nearest multiple of 90 (so no digits of pi are lost), then Taylor polynomials to the 17th and 16th
 // power, whose next terms are below half an ulp on [-pi/4, pi/4]. Inline, it costs a third of libm's sincos,
@@ -295,24 +312,8 @@ void half_angle_sin_cos(double degrees, double& sine, double& cosine) {
   const double quarter_turns = std::nearbyint(half / 90.0);
   const double r = (half - 90.0 * quarter_turns) * (3.14159265358979323846 / 180.0);
   const double r2 = r * r;
-  double s = 1.0 / 355687428096000.0;  // 1/17!
-  s = s * r2 - 1.0 / 1307674368000.0;
-  s = s * r2 + 1.0 / 6227020800.0;
-  s = s * r2 - 1.0 / 39916800.0;
-  s = s * r2 + 1.0 / 362880.0;
-  s = s * r2 - 1.0 / 5040.0;
-  s = s * r2 + 1.0 / 120.0;
-  s = s * r2 - 1.0 / 6.0;
-  s = r + r * r2 * s;
-  double c = 1.0 / 20922789888000.0;  // 1/16!
-  c = c * r2 - 1.0 / 87178291200.0;
-  c = c * r2 + 1.0 / 479001600.0;
-  c = c * r2 - 1.0 / 3628800.0;
-  c = c * r2 + 1.0 / 40320.0;
-  c = c * r2 - 1.0 / 720.0;
-  c = c * r2 + 1.0 / 24.0;
-  c = c * r2 - 0.5;
-  c = 1.0 + r2 * c;
+  const double s = r + r * r2 * taylor_series(kSineTerms, r2);
+  const double c = 1.0 + r2 * taylor_series(kCosineTerms, r2);
   switch (static_cast<int64_t>(quarter_turns) & 3) {
     case 0: sine = s; cosine = c; break;
     case 1: sine = c; cosine = -s; break;
