@@ -108,7 +108,10 @@ std::string remove_tree(const std::string& path) {
   return failure;
 }
 
-MappedFile MappedFile::open(const std::string& path, bool populate) {
+namespace {
+
+// A descriptor of the regular file `path` and its size; InputError naming it otherwise.
+int open_regular_file(const std::string& path, size_t& size) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
   struct stat info {};
@@ -116,8 +119,15 @@ MappedFile MappedFile::open(const std::string& path, bool populate) {
     ::close(fd);
     throw InputError(path, 0, "not a regular file");
   }
+  size = static_cast<size_t>(info.st_size);
+  return fd;
+}
+
+}  // namespace
+
+MappedFile MappedFile::open(const std::string& path, bool populate) {
   MappedFile out;
-  out.size_ = static_cast<size_t>(info.st_size);
+  const int fd = open_regular_file(path, out.size_);
   if (out.size_ == 0) {
     ::close(fd);
     return out;
@@ -133,6 +143,39 @@ MappedFile MappedFile::open(const std::string& path, bool populate) {
   const size_t bytes = out.size_;
   out.owner_ = std::shared_ptr<const void>(mapping, [bytes](const void* p) { ::munmap(const_cast<void*>(p), bytes); });
   out.data_ = static_cast<const unsigned char*>(mapping);
+  return out;
+}
+
+std::optional<MappedFile> MappedFile::open_joined(const std::vector<std::string>& paths) {
+  struct Descriptors {  // closed on every way out
+    std::vector<int> fds;
+    ~Descriptors() {
+      for (const int fd : fds) ::close(fd);
+    }
+  } files;
+  const size_t page = static_cast<size_t>(::sysconf(_SC_PAGESIZE));
+  std::vector<size_t> sizes(paths.size());
+  size_t total = 0;
+  for (size_t i = 0; i < paths.size(); ++i) {
+    files.fds.push_back(open_regular_file(paths[i], sizes[i]));
+    if (i + 1 < paths.size() && (sizes[i] == 0 || sizes[i] % page != 0)) return std::nullopt;
+    total += sizes[i];
+  }
+  MappedFile out;
+  out.size_ = total;
+  if (total == 0) return out;
+  // One reserved range, then each file mapped over its part of it.
+  const size_t reserved = (total + page - 1) / page * page;
+  void* base = ::mmap(nullptr, reserved, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (base == MAP_FAILED) throw InputError(paths.front(), 0, std::string("cannot map: ") + std::strerror(errno));
+  out.owner_ = std::shared_ptr<const void>(base, [reserved](const void* p) { ::munmap(const_cast<void*>(p), reserved); });
+  size_t offset = 0;
+  for (size_t i = 0; i < paths.size() && sizes[i] > 0; ++i) {
+    void* mapping = ::mmap(static_cast<char*>(base) + offset, sizes[i], PROT_READ, MAP_PRIVATE | MAP_FIXED, files.fds[i], 0);
+    if (mapping == MAP_FAILED) throw InputError(paths[i], 0, std::string("cannot map: ") + std::strerror(errno));
+    offset += sizes[i];
+  }
+  out.data_ = static_cast<const unsigned char*>(base);
   return out;
 }
 

@@ -7,15 +7,13 @@
 #include <nlohmann/json.hpp>
 #include <torch/torch.h>
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <numeric>
+#include <optional>
 #include <string_view>
 
 namespace nec::text {
@@ -91,53 +89,31 @@ class GraphWeights {
   // but the last fills whole pages (as the package's 4-MiB shards do), so that loading copies nothing and a
   // caption touches only its pieces' rows of the 8,000-piece embedding; else read.
   void read_shards(const std::string& dir, const nlohmann::json& shards) {
-    std::vector<std::pair<std::string, int64_t>> sized;
-    int64_t total = 0;
+    std::vector<std::string> paths;
+    std::vector<int64_t> sizes;
     for (const auto& shard : shards) {
       const std::string path = (fs::path(dir) / shard.get<std::string>()).string();
       std::error_code ec;
       const auto size = fs::file_size(path, ec);
       if (ec) throw InputError(path, 0, std::string("a weight shard is missing; ") + kSentenceEncoderHint);
-      sized.emplace_back(path, static_cast<int64_t>(size));
-      total += static_cast<int64_t>(size);
+      paths.push_back(path);
+      sizes.push_back(static_cast<int64_t>(size));
     }
-    bytes_ = map_files(sized, total);
-    if (bytes_.defined()) return;
+    const int64_t total = std::accumulate(sizes.begin(), sizes.end(), int64_t{0});
+    if (std::optional<MappedFile> joined = MappedFile::open_joined(paths); joined && joined->size() > 0) {
+      auto owner = std::make_shared<MappedFile>(std::move(*joined));
+      // Read-only pages: the weights are buffers of a frozen graph, never written.
+      bytes_ = torch::from_blob(const_cast<unsigned char*>(owner->data()), {static_cast<int64_t>(owner->size())},
+                                [owner](void*) {}, torch::kUInt8);
+      return;
+    }
     bytes_ = torch::empty({total}, torch::kUInt8);
     char* out = reinterpret_cast<char*>(bytes_.data_ptr<uint8_t>());
-    for (const auto& [path, size] : sized) {
-      std::ifstream in(path, std::ios::binary);
-      if (!in.read(out, size)) throw InputError(path, 0, "cannot read the weight shard; " + std::string(kSentenceEncoderHint));
-      out += size;
+    for (size_t i = 0; i < paths.size(); ++i) {
+      std::ifstream in(paths[i], std::ios::binary);
+      if (!in.read(out, sizes[i])) throw InputError(paths[i], 0, "cannot read the weight shard; " + std::string(kSentenceEncoderHint));
+      out += sizes[i];
     }
-  }
-
-  // The files mapped one after another into one reserved range (private: a write would copy the page, never
-  // reach the file); undefined where a file but the last does not fill whole pages or a mapping fails.
-  static at::Tensor map_files(const std::vector<std::pair<std::string, int64_t>>& files, int64_t total) {
-    const int64_t page = sysconf(_SC_PAGESIZE);
-    for (size_t i = 0; i + 1 < files.size(); ++i) {
-      if (files[i].second % page != 0) return {};
-    }
-    const size_t reserved = static_cast<size_t>((total + page - 1) / page * page);
-    if (reserved == 0) return {};
-    void* base = mmap(nullptr, reserved, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (base == MAP_FAILED) return {};
-    auto unmap = [reserved](void* data) { munmap(data, reserved); };
-    int64_t offset = 0;
-    for (const auto& [path, size] : files) {
-      const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
-      void* mapped = fd < 0 ? MAP_FAILED
-                            : mmap(static_cast<char*>(base) + offset, static_cast<size_t>(size), PROT_READ | PROT_WRITE,
-                                   MAP_PRIVATE | MAP_FIXED, fd, 0);
-      if (fd >= 0) close(fd);
-      if (mapped == MAP_FAILED) {
-        unmap(base);
-        return {};
-      }
-      offset += size;
-    }
-    return torch::from_blob(base, {total}, unmap, torch::kUInt8);
   }
 
   struct Entry {

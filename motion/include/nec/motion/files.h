@@ -3,8 +3,10 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace nec {
 
@@ -33,6 +35,10 @@ class MappedFile {
   // `populate` faults every page in now (faster than one by one on first use).
   // Throws InputError naming the file when it cannot be opened or mapped.
   static MappedFile open(const std::string& path, bool populate = false);
+  // The files end to end in one mapping, as if they were one file; none where
+  // a file but the last does not fill whole pages (read them instead). Throws
+  // InputError naming a file that cannot be opened or mapped.
+  static std::optional<MappedFile> open_joined(const std::vector<std::string>& paths);
 
   const unsigned char* data() const { return data_; }
   size_t size() const { return size_; }
