@@ -1,6 +1,6 @@
 // Cost of the diffusion model on the CPU.
 //
-//   bench_diffusion [benchmark flags]
+//   bench_diffusion [--configs=DIR] [--profile_ops=DIR] [benchmark flags]   # e.g. --benchmark_filter=TrainStep
 //
 // - BM_Sample4s/batch:B: one call of diffusion::sample_motions for B samples
 //   of a 4-s motion (120 frames at 30 fps) at 50 DDIM steps with guidance 2.5
@@ -13,19 +13,47 @@
 //   each frame, then each joint across frames) or full spatio-temporal
 //   attention over all J x T tokens (F = 1; computed 1,024 queries at a time
 //   so that its score matrix fits in memory; the work is the same).
-// Each runs 3 repetitions of one iteration.
+// - BM_DiffusionTrainStep/stage:S/joints:J/threads:N: what DiffusionTrainer::step
+//   does after its batch is drawn (diffusion/synthetic.h): train mode,
+//   zero_grad, the denoising loss (with the velocity term in the motion
+//   stage), backward, clipping, AdamW at the scheduled rate. S = motion: the
+//   temporal blocks on a frozen pose model, DIR/diffusion_motion_cpu.json
+//   (batch 4 x 120 frames); S = pose: DIR/diffusion_pose_cpu.json (batch 32 x
+//   pose_frames); the model of DIR/diffusion_pose_cpu.json with skeleton_dim =
+//   encoder.dim of DIR/owo_cpu.json; DIR is the repository's configs/ unless
+//   given. The batch is synthetic: J the widest skeleton (random trees, the
+//   other items down to 3/4 of J joints, crops down to half the window),
+//   random joint embeddings in place of OwO's, random use-lite caption
+//   features in place of the sentence encoder's (neither is read).
+//   benchmarks/peer_diffusion_step.py makes the same tensors with the same
+//   torch random draws, so its first losses must equal the counters
+//   loss_step0 and loss_step1 here. Counters as BM_TatTrainStep (bench_tat):
+//   parameters (all of the denoiser's; the peer checks its count against it),
+//   trained_parameters (the stage's), loss_step0, loss_step1, step_peak_MiB
+//   (peak RSS of one step above the RSS before it, after malloc_trim),
+//   rss_peak_MiB. Model, first losses and memory are made once per stage and
+//   J, at one thread after torch::manual_seed(0), then 2 untimed steps.
+// Each runs 3 repetitions of one iteration (the pose stage's train step: 3 iterations).
 #include "nec/diffusion/denoiser.h"
 #include "nec/diffusion/sampling.h"
+#include "nec/diffusion/synthetic.h"
 #include "nec/diffusion/training.h"
 #include "nec/layers/transformer.h"
 #include "nec/train/heap.h"
+#include "train_step_support.h"
 
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 #include <torch/torch.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <memory>
 #include <string>
+#include <utility>
 #include <thread>
 #include <vector>
 
@@ -33,6 +61,12 @@ namespace {
 
 constexpr int kRepetitions = 3;
 constexpr int64_t kJoints = 24, kFrames = 120, kDim = 64, kHeads = 4, kQueryChunk = 1024;
+constexpr uint64_t kSeed = 0;        // torch::manual_seed before inputs and model (as the peer)
+
+std::string& configs_dir() {
+  static std::string dir = std::string(NEC_SOURCE_DIR) + "/configs";
+  return dir;
+}
 
 // configs/diffusion_pose_cpu.json's denoiser with every weight random (the zero-initialised gates too).
 struct RandomDenoiser {
@@ -42,7 +76,7 @@ struct RandomDenoiser {
 
   RandomDenoiser() {
     nec::diffusion::DenoiserConfig config =
-        nec::diffusion::read_diffusion_train_config(std::string(NEC_SOURCE_DIR) + "/configs/diffusion_pose_cpu.json").model;
+        nec::diffusion::read_diffusion_train_config(configs_dir() + "/diffusion_pose_cpu.json").model;
     config.skeleton_dim = 64;
     torch::manual_seed(0);
     model = nec::diffusion::MotionDenoiser(config);
@@ -105,6 +139,76 @@ void BM_Attention(benchmark::State& state) {
   state.counters["tokens"] = static_cast<double>(joints * frames);
 }
 
+
+// ---- Training step ----
+
+using nec::diffusion::DiffusionStage;
+
+// A stage's model, optimizer and one batch, kept across repetitions and thread counts.
+struct Trainee {
+  DiffusionStage stage = DiffusionStage::kMotion;
+  nec::diffusion::DiffusionTrainConfig config;
+  nec::diffusion::SyntheticDiffusionBatch inputs;
+  nec::diffusion::MotionDenoiser model{nullptr};
+  std::unique_ptr<torch::optim::AdamW> optimizer;
+  int64_t trained_parameters = 0;
+  int64_t steps = 0;  // steps taken (learning-rate schedule position)
+  nec::bench::StepRecord record;
+};
+
+double train_step(Trainee& t) {
+  return nec::diffusion::synthetic_diffusion_train_step(*t.model, *t.optimizer, t.inputs, t.config, t.stage, ++t.steps);
+}
+
+Trainee& trainee(DiffusionStage stage, int64_t joints) {
+  static std::map<std::pair<DiffusionStage, int64_t>, std::unique_ptr<Trainee>> made;
+  std::unique_ptr<Trainee>& slot = made[{stage, joints}];
+  if (slot) return *slot;
+  slot = std::make_unique<Trainee>();
+  Trainee& t = *slot;
+  const int threads = torch::get_num_threads();
+  torch::set_num_threads(1);
+  t.stage = stage;
+  t.config = nec::diffusion::synthetic_stage_config(configs_dir(), stage);
+  torch::manual_seed(kSeed);
+  t.inputs = nec::diffusion::synthetic_diffusion_batch(t.config, stage, joints);
+  t.model = nec::diffusion::synthetic_denoiser(t.config, stage, t.inputs);
+  const std::vector<at::Tensor> trained = nec::diffusion::trained_parameters(*t.model, stage);
+  t.optimizer = nec::train::make_adamw(trained, t.config.optimizer);
+  for (const at::Tensor& p : trained) t.trained_parameters += p.numel();
+  t.record = nec::bench::record_first_steps(t.model->parameters(), [&] { return train_step(t); });
+  torch::set_num_threads(threads);
+  return t;
+}
+
+void BM_DiffusionTrainStep(benchmark::State& state, DiffusionStage stage) {
+  const int threads = torch::get_num_threads();
+  Trainee& t = trainee(stage, state.range(0));
+  torch::set_num_threads(static_cast<int>(state.range(1)));
+  for (auto _ : state) benchmark::DoNotOptimize(train_step(t));
+  nec::bench::profile_ops_if_asked(std::string("BM_DiffusionTrainStep/stage:") + nec::diffusion::to_string(stage) +
+                                       "/joints:" + std::to_string(state.range(0)) + "/threads:" +
+                                       std::to_string(state.range(1)),
+                                   [&] { train_step(t); }, 1);
+  torch::set_num_threads(threads);
+  nec::bench::set_step_counters(state, t.record);
+  state.counters["trained_parameters"] = static_cast<double>(t.trained_parameters);
+}
+
+void register_train_steps() {
+  for (const DiffusionStage stage : {DiffusionStage::kMotion, DiffusionStage::kPose}) {
+    const std::string name = std::string("BM_DiffusionTrainStep/stage:") + nec::diffusion::to_string(stage);
+    benchmark::RegisterBenchmark(name.c_str(), BM_DiffusionTrainStep, stage)
+        ->ArgNames({"joints", "threads"})
+        ->ArgsProduct({{22, 100}, {1, 2}})
+        ->Iterations(stage == DiffusionStage::kPose ? 3 : 1)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime()
+        ->MeasureProcessCPUTime()
+        ->Repetitions(kRepetitions);
+  }
+}
+
 }  // namespace
 
 BENCHMARK(BM_Sample4s)->ArgName("batch")->Arg(1)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1)->Repetitions(kRepetitions);
@@ -119,7 +223,17 @@ BENCHMARK(BM_Attention)
 int main(int argc, char** argv) {
   nec::train::keep_large_allocations_in_heap();  // as nec does
   torch::set_num_threads(static_cast<int>(std::thread::hardware_concurrency()));  // every core (2 here)
-  benchmark::Initialize(&argc, argv);
+  benchmark::Initialize(&argc, argv);  // removes the --benchmark_* flags it knows
+  for (int i = 1; i < argc; ++i) {
+    if (std::strncmp(argv[i], "--configs=", 10) == 0) {
+      configs_dir() = argv[i] + 10;
+    } else if (!nec::bench::take_profile_ops_flag(argv[i])) {
+      std::fprintf(stderr, "bench_diffusion: unknown argument '%s' (--configs=DIR, --profile_ops=DIR or --benchmark_* flags)\n",
+                   argv[i]);
+      return 2;
+    }
+  }
+  register_train_steps();
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

@@ -1,8 +1,29 @@
 // Cost of the text-motion evaluator on the CPU (configs/evaluator_cpu.json):
-// caption encoding, motion embedding and a retrieval query over a 10,000-clip index.
+// one training step, caption encoding, motion embedding and a retrieval query
+// over a 10,000-clip index.
 //
-//   bench_evaluator [--configs=DIR] [benchmark flags]
+//   bench_evaluator [--configs=DIR] [--profile_ops=DIR] [benchmark flags]   # e.g. --benchmark_filter=TrainStep
 //
+// Model: DIR/evaluator_cpu.json with joint_embedding_dim = encoder.dim of
+// DIR/owo_cpu.json (as `nec train evaluator` sets it from the OwO
+// checkpoint); DIR is the repository's configs/ unless given.
+// - BM_EvaluatorTrainStep/joints:J/threads:N: what EvaluatorTrainer::step
+//   does after its batch is made (evaluator/synthetic.h): forward (train
+//   mode), contrastive loss, zero_grad, backward, clip_grad_norm_, AdamW at
+//   the scheduled learning rate. Inputs are a synthetic batch (B =
+//   batch_size, T = window_frames, skeletons of J - J / 4 to J joints, T / 2
+//   to T real frames): random Θ, random joint embeddings in place of OwO's,
+//   random per-piece features and unit sentence vectors in place of the
+//   sentence encoder's. Needs neither the sentence encoder nor a dataset.
+//   benchmarks/peer_evaluator_step.py makes the same tensors with the same
+//   torch random draws, so its first losses must equal the counters
+//   loss_step0 and loss_step1 here. Counters: parameters (the peer checks
+//   its count against it), step_peak_MiB (peak RSS of one step above the RSS
+//   before it, after malloc_trim) and rss_peak_MiB (the process's peak RSS
+//   during that step); model, first losses and memory are made once per J,
+//   at one thread.
+// The other benchmarks share one setup (the config's caption reader: with
+// use-lite, the sentence encoder) and are skipped when it cannot be made.
 // - BM_EncodeCaptions/threads:N: the config's caption reader + text encoder
 //   (eval mode) on batches of 32 corpus-like captions; counter captions_per_s.
 //   With the use-lite backbone that is the sentence encoder and the head on
@@ -20,6 +41,7 @@
 // reports mean, median, stddev, min and max of wall-clock and process CPU time.
 #include "nec/evaluator/evaluator.h"
 #include "nec/evaluator/retrieval_index.h"
+#include "nec/evaluator/synthetic.h"
 #include "nec/evaluator/training.h"
 #include "nec/owo/graph.h"
 #include "nec/owo/pretrain.h"
@@ -31,6 +53,8 @@
 #include "nec/text/text_encoder.h"
 #include "nec/text/word_vectors.h"
 #include "nec/train/heap.h"
+#include "nec/train/optimizer.h"
+#include "train_step_support.h"
 
 #include <benchmark/benchmark.h>
 #include <nlohmann/json.hpp>
@@ -41,10 +65,12 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <map>
 #include <random>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -55,10 +81,32 @@ constexpr int kDefaultRepetitions = 5;
 constexpr int64_t kBatch = 32;
 constexpr int64_t kClipFrames = 120;
 constexpr int64_t kIndexClips = 10000;
+constexpr uint64_t kSeed = 0;        // torch::manual_seed before the step's inputs and model (as the peer)
+constexpr int64_t kTrainIterations22 = 3, kTrainIterations100 = 1;  // timed steps per repetition (as the peer)
 
 std::string& configs_dir() {
   static std::string dir = std::string(NEC_SOURCE_DIR) + "/configs";
   return dir;
+}
+
+// The encoder width of DIR/owo_cpu.json: the joint embeddings the motion encoder reads.
+int64_t owo_dim() {
+  const std::string path = configs_dir() + "/owo_cpu.json";
+  std::ifstream owo(path);
+  if (!owo) throw std::runtime_error("cannot read " + path);
+  return nlohmann::json::parse(owo).at("encoder").at("dim").get<int64_t>();
+}
+
+// evaluator_cpu.json, joint embeddings as wide as owo_cpu.json's encoder.
+const nec::evaluator::EvaluatorTrainConfig& train_config() {
+  static const nec::evaluator::EvaluatorTrainConfig config = [] {
+    nec::evaluator::EvaluatorTrainConfig c =
+        nec::evaluator::read_evaluator_train_config(configs_dir() + "/evaluator_cpu.json");
+    c.model.motion.joint_embedding_dim = owo_dim();
+    c.validate();
+    return c;
+  }();
+  return config;
 }
 
 std::vector<std::string> captions() {
@@ -98,16 +146,13 @@ struct Setup {
     nec::text::write_word_vectors((folder / "words.bin").string(), {words.begin(), words.end()}, rows, 100);
     vectors.emplace(nec::text::WordVectors::load((folder / "words.bin").string()));
 
-    nec::evaluator::EvaluatorTrainConfig config =
-        nec::evaluator::read_evaluator_train_config(configs_dir() + "/evaluator_cpu.json");
-    std::ifstream owo_file(configs_dir() + "/owo_cpu.json");
+    nec::evaluator::EvaluatorTrainConfig config = train_config();
     nec::owo::OwoConfig owo_config;
-    owo_config.dim = nlohmann::json::parse(owo_file).at("encoder").at("dim").get<int64_t>();
+    owo_config.dim = owo_dim();
     owo_config.name_dim = 0;
     torch::manual_seed(0);
     owo = nec::owo::OwoPretrainer(owo_config, nec::owo::PretrainConfig{});
     owo->eval();
-    config.model.motion.joint_embedding_dim = owo_config.dim;
     reader = nec::text::CaptionReader::for_training(config.model.text, (folder / "spm.model").string());
     model = nec::evaluator::Evaluator(config.model);
     model->eval();
@@ -120,6 +165,68 @@ Setup& setup() {
   return s;
 }
 
+// The shared setup, or null after marking the benchmark skipped with the reason (e.g. no sentence encoder).
+Setup* setup_or_skip(benchmark::State& state) {
+  try {
+    return &setup();
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return nullptr;
+  }
+}
+
+// ---- Training step ----
+
+// A model, its optimizer and one batch, kept across repetitions and thread counts.
+struct Trainee {
+  nec::evaluator::ContrastiveBatch inputs;
+  nec::evaluator::Evaluator model{nullptr};
+  std::unique_ptr<torch::optim::AdamW> optimizer;
+  int64_t steps = 0;  // steps taken (learning-rate schedule position)
+  nec::bench::StepRecord record;
+};
+
+// One step of the peer-comparable loop (evaluator/synthetic.h) at the next schedule position.
+double train_step(Trainee& t) {
+  return nec::evaluator::synthetic_evaluator_train_step(*t.model, *t.optimizer, t.inputs, train_config(), ++t.steps);
+}
+
+// The trainee of a joint count, made on first use (at one thread, from the
+// seed) and kept for every later benchmark of that size.
+Trainee& trainee(int64_t joints) {
+  static std::map<int64_t, std::unique_ptr<Trainee>> made;
+  std::unique_ptr<Trainee>& slot = made[joints];
+  if (slot) return *slot;
+  slot = std::make_unique<Trainee>();
+  Trainee& t = *slot;
+  const nec::evaluator::EvaluatorTrainConfig& config = train_config();
+  const int threads = torch::get_num_threads();
+  torch::set_num_threads(1);
+  torch::manual_seed(kSeed);
+  t.inputs = nec::evaluator::synthetic_contrastive_batch(config.batch_size, config.data.window_frames, joints,
+                                                         config.model.motion.joint_embedding_dim);
+  t.model = nec::evaluator::Evaluator(config.model);
+  t.optimizer = nec::train::make_adamw(t.model->parameters(), config.optimizer);
+  t.record = nec::bench::record_first_steps(t.model->parameters(), [&] { return train_step(t); });
+  torch::set_num_threads(threads);
+  return t;
+}
+
+void BM_EvaluatorTrainStep(benchmark::State& state) {
+  const int64_t joints = state.range(0);
+  torch::set_num_threads(static_cast<int>(state.range(1)));
+  Trainee& t = trainee(joints);
+  for (auto _ : state) benchmark::DoNotOptimize(train_step(t));
+  nec::bench::profile_ops_if_asked("BM_EvaluatorTrainStep/joints:" + std::to_string(joints) + "/threads:" +
+                                       std::to_string(state.range(1)),
+                                   [&] { train_step(t); }, 1);
+  const nec::evaluator::EvaluatorTrainConfig& config = train_config();
+  state.SetItemsProcessed(state.iterations() * config.batch_size);  // (clip, caption) pairs
+  nec::bench::set_step_counters(state, t.record);
+}
+
+// ---- Captions, motions, retrieval ----
+
 // The next kBatch captions of `all`, going round.
 std::vector<std::string> next_batch(const std::vector<std::string>& all, size_t& next) {
   std::vector<std::string> batch;
@@ -129,13 +236,14 @@ std::vector<std::string> next_batch(const std::vector<std::string>& all, size_t&
 
 void BM_EncodeCaptions(benchmark::State& state) {
   torch::set_num_threads(static_cast<int>(state.range(0)));
-  Setup& s = setup();
+  Setup* s = setup_or_skip(state);
+  if (s == nullptr) return;
   const std::vector<std::string> all = captions();
   size_t next = 0;
   for (auto _ : state) {
     const std::vector<std::string> batch = next_batch(all, next);
     c10::InferenceMode inference;
-    const at::Tensor out = s.model->embed_text(s.reader.read(batch, &*s.vectors, "bench"));
+    const at::Tensor out = s->model->embed_text(s->reader.read(batch, &*s->vectors, "bench"));
     benchmark::DoNotOptimize(out.data_ptr());
   }
   state.counters["captions_per_s"] =
@@ -181,7 +289,8 @@ nec::Skeleton random_skeleton(int64_t joints, std::mt19937& rng) {
 
 void BM_EmbedMotions(benchmark::State& state) {
   torch::set_num_threads(static_cast<int>(state.range(1)));
-  Setup& s = setup();
+  Setup* s = setup_or_skip(state);
+  if (s == nullptr) return;
   const int64_t joints = state.range(0);
   std::mt19937 rng(1);
   std::vector<nec::Skeleton> skeletons;
@@ -193,8 +302,8 @@ void BM_EmbedMotions(benchmark::State& state) {
   const at::Tensor frame_mask = torch::ones({kBatch, kClipFrames}, torch::kBool);
   for (auto _ : state) {
     c10::InferenceMode inference;
-    const at::Tensor embeddings = nec::tat::embed_skeletons(*s.owo->encoder, skeletons, names, nullptr);
-    const at::Tensor out = s.model->embed_motion(features, joint_mask, frame_mask, embeddings);
+    const at::Tensor embeddings = nec::tat::embed_skeletons(*s->owo->encoder, skeletons, names, nullptr);
+    const at::Tensor out = s->model->embed_motion(features, joint_mask, frame_mask, embeddings);
     benchmark::DoNotOptimize(out.data_ptr());
   }
   state.counters["clips_per_s"] =
@@ -203,9 +312,10 @@ void BM_EmbedMotions(benchmark::State& state) {
 
 void BM_RetrievalQuery(benchmark::State& state) {
   torch::set_num_threads(static_cast<int>(state.range(0)));
-  Setup& s = setup();
+  Setup* s = setup_or_skip(state);
+  if (s == nullptr) return;
   nec::evaluator::RetrievalIndex index;
-  index.dim = static_cast<int>(s.model->config().motion.output_dim);
+  index.dim = static_cast<int>(s->model->config().motion.output_dim);
   torch::manual_seed(3);
   const at::Tensor rows = torch::nn::functional::normalize(
       torch::randn({kIndexClips, index.dim}), torch::nn::functional::NormalizeFuncOptions().dim(1));
@@ -215,14 +325,11 @@ void BM_RetrievalQuery(benchmark::State& state) {
   size_t next = 0;
   for (auto _ : state) {
     c10::InferenceMode inference;
-    const at::Tensor query = s.model->embed_text(s.reader.read({all[next++ % all.size()]}, &*s.vectors, "query"));
+    const at::Tensor query = s->model->embed_text(s->reader.read({all[next++ % all.size()]}, &*s->vectors, "query"));
     const std::vector<nec::evaluator::Match> top = index.nearest_clips(query, 5, {});
     benchmark::DoNotOptimize(top.data());
   }
 }
-
-double smallest(const std::vector<double>& values) { return *std::min_element(values.begin(), values.end()); }
-double largest(const std::vector<double>& values) { return *std::max_element(values.begin(), values.end()); }
 
 template <typename Registered>
 void common(Registered* b, int64_t iterations) {
@@ -230,12 +337,19 @@ void common(Registered* b, int64_t iterations) {
       ->Unit(benchmark::kMillisecond)
       ->UseRealTime()
       ->MeasureProcessCPUTime()
-      ->ComputeStatistics("min", smallest)
-      ->ComputeStatistics("max", largest)
+      ->ComputeStatistics("min", nec::bench::smallest)
+      ->ComputeStatistics("max", nec::bench::largest)
       ->DisplayAggregatesOnly(true);
 }
 
 void register_all() {
+  for (const int64_t joints : {22, 100}) {
+    common(benchmark::RegisterBenchmark("BM_EvaluatorTrainStep", BM_EvaluatorTrainStep)
+               ->ArgNames({"joints", "threads"})
+               ->Args({joints, 1})
+               ->Args({joints, 2}),
+           joints == 22 ? kTrainIterations22 : kTrainIterations100);
+  }
   common(benchmark::RegisterBenchmark("BM_EncodeCaptions", BM_EncodeCaptions)->ArgNames({"threads"})->Arg(1)->Arg(2), 20);
   common(benchmark::RegisterBenchmark("BM_EncodeSentences", BM_EncodeSentences)->ArgNames({"threads"})->Arg(1)->Arg(2), 20);
   for (const int64_t joints : {22, 100}) {
@@ -262,13 +376,14 @@ int main(int argc, char** argv) {
   for (int i = 1; i < count; ++i) {
     if (std::strncmp(args[i], "--configs=", 10) == 0) {
       configs_dir() = args[i] + 10;
-    } else {
-      std::fprintf(stderr, "bench_evaluator: unknown argument '%s' (--configs=DIR or --benchmark_* flags)\n", args[i]);
+    } else if (!nec::bench::take_profile_ops_flag(args[i])) {
+      std::fprintf(stderr, "bench_evaluator: unknown argument '%s' (--configs=DIR, --profile_ops=DIR or --benchmark_* flags)\n",
+                   args[i]);
       return 2;
     }
   }
   try {
-    setup();
+    train_config();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_evaluator: %s\n", e.what());
     return 1;

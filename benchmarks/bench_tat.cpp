@@ -1,7 +1,7 @@
 // Cost of the tokenizer (TAT) on the CPU: one training step, whole-clip
 // encode / decode throughput, and the peak memory of a step.
 //
-//   bench_tat [--configs=DIR] [benchmark flags]   # e.g. --benchmark_filter=TrainStep
+//   bench_tat [--configs=DIR] [--profile_ops=DIR] [benchmark flags]   # e.g. --benchmark_filter=TrainStep
 //
 // Model: DIR/tat_cpu.json with joint_embedding_dim = encoder.dim of
 // DIR/owo_cpu.json (as `nec train tat` sets it from the OwO checkpoint); DIR
@@ -18,6 +18,8 @@
 // - BM_TatEncodeClip / BM_TatDecodeClip/joints:J/threads:N: encode_clip /
 //   decode_clip of a 600-frame random clip (64-frame windows, 16 overlap), in
 //   eval mode; counter frames_per_s.
+// With --profile_ops=DIR, one more step per training-step benchmark runs under
+// the op profiler (train_step_support.h) into DIR/BM_TatTrainStep_joints_J_threads_N.json.
 // Counters of the training step: parameters (the peer checks its count
 // against it), step_peak_MiB (peak RSS of one step above the RSS before it,
 // after malloc_trim) and rss_peak_MiB (the process's peak RSS during that
@@ -33,9 +35,9 @@
 #include "nec/tat/tokenizer.h"
 #include "nec/tat/training.h"
 #include "nec/train/heap.h"
+#include "train_step_support.h"
 
 #include <benchmark/benchmark.h>
-#include <malloc.h>
 #include <nlohmann/json.hpp>
 #include <torch/torch.h>
 
@@ -57,7 +59,6 @@ using nec::tat::Tokenizer;
 
 constexpr uint64_t kSeed = 0;           // torch::manual_seed before inputs and model (as the peer)
 constexpr int64_t kClipFrames = 600;    // encode / decode clip length
-constexpr int64_t kWarmupSteps = 2;     // untimed steps before a J's first measurement
 constexpr int kDefaultRepetitions = 5;
 
 std::string& configs_dir() {
@@ -79,41 +80,6 @@ const nec::tat::TatTrainConfig& train_config() {
   return config;
 }
 
-// ---- Memory: peak RSS of a region (Linux: /proc/self/clear_refs resets VmHWM). ----
-
-int64_t status_kib(const char* field) {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  const size_t length = std::strlen(field);
-  while (std::getline(status, line)) {
-    if (line.compare(0, length, field) == 0) return std::stoll(line.substr(length + 1));
-  }
-  return -1;
-}
-
-struct PeakRss {
-  double above_start_mib = -1;  // peak RSS during the region minus RSS at its start
-  double peak_mib = -1;         // peak RSS during the region
-};
-
-// Runs `region` with the kernel's peak-RSS mark reset at its start. Free heap
-// goes back to the system first, so memory the region reuses from earlier
-// steps counts again.
-template <typename Region>
-PeakRss measure_peak_rss(Region&& region) {
-  malloc_trim(0);
-  std::ofstream("/proc/self/clear_refs") << "5";
-  const int64_t start = status_kib("VmRSS:");
-  region();
-  const int64_t peak = status_kib("VmHWM:");
-  PeakRss out;
-  if (start >= 0 && peak >= 0) {
-    out.above_start_mib = static_cast<double>(peak - start) / 1024.0;
-    out.peak_mib = static_cast<double>(peak) / 1024.0;
-  }
-  return out;
-}
-
 // ---- Training step ----
 
 // A model, its optimizer and one batch, kept across repetitions and thread counts.
@@ -121,10 +87,8 @@ struct Trainee {
   nec::tat::SyntheticBatch inputs;
   Tokenizer model{nullptr};
   std::unique_ptr<torch::optim::AdamW> optimizer;
-  int64_t parameters = 0;
-  int64_t steps = 0;                 // steps taken (learning-rate schedule position)
-  std::vector<double> first_losses;  // loss of each of the first kWarmupSteps steps
-  PeakRss memory;                    // of step kWarmupSteps + 1
+  int64_t steps = 0;  // steps taken (learning-rate schedule position)
+  nec::bench::StepRecord record;
 };
 
 // One step of the peer-comparable loop (tat/synthetic.h) at the next schedule position.
@@ -153,9 +117,7 @@ void build_trainee(Trainee& t, int64_t joints) {
   t.inputs = nec::tat::synthetic_batch(config.batch_size, config.data.window_frames, joints, config.model.joint_embedding_dim);
   t.model = Tokenizer(config.model);
   t.optimizer = nec::train::make_adamw(t.model->parameters(), config.optimizer);
-  for (const at::Tensor& p : t.model->parameters()) t.parameters += p.numel();
-  for (int64_t i = 0; i < kWarmupSteps; ++i) t.first_losses.push_back(train_step(t));
-  t.memory = measure_peak_rss([&] { benchmark::DoNotOptimize(train_step(t)); });
+  t.record = nec::bench::record_first_steps(t.model->parameters(), [&] { return train_step(t); });
   torch::set_num_threads(threads);
 }
 
@@ -166,13 +128,12 @@ void BM_TatTrainStep(benchmark::State& state) {
   torch::set_num_threads(static_cast<int>(state.range(1)));
   Trainee& t = trainee(joints);
   for (auto _ : state) benchmark::DoNotOptimize(train_step(t));
+  nec::bench::profile_ops_if_asked("BM_TatTrainStep/joints:" + std::to_string(joints) + "/threads:" +
+                                       std::to_string(state.range(1)),
+                                   [&] { train_step(t); }, 1);
   const nec::tat::TatTrainConfig& config = train_config();
   state.SetItemsProcessed(state.iterations() * config.batch_size * config.data.window_frames);  // frames
-  state.counters["parameters"] = static_cast<double>(t.parameters);
-  state.counters["loss_step0"] = t.first_losses.at(0);
-  state.counters["loss_step1"] = t.first_losses.at(1);
-  state.counters["step_peak_MiB"] = t.memory.above_start_mib;
-  state.counters["rss_peak_MiB"] = t.memory.peak_mib;
+  nec::bench::set_step_counters(state, t.record);
 }
 
 // ---- Whole-clip encode / decode ----
@@ -234,9 +195,6 @@ void BM_TatDecodeClip(benchmark::State& state) {
       benchmark::Counter(static_cast<double>(state.iterations() * kClipFrames), benchmark::Counter::kIsRate);
 }
 
-double smallest(const std::vector<double>& values) { return *std::min_element(values.begin(), values.end()); }
-double largest(const std::vector<double>& values) { return *std::max_element(values.begin(), values.end()); }
-
 void register_all() {
   struct Entry {
     const char* name;
@@ -255,8 +213,8 @@ void register_all() {
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime()            // time: wall clock
           ->MeasureProcessCPUTime()  // cpu_time: all threads of the process
-          ->ComputeStatistics("min", smallest)
-          ->ComputeStatistics("max", largest)
+          ->ComputeStatistics("min", nec::bench::smallest)
+          ->ComputeStatistics("max", nec::bench::largest)
           ->DisplayAggregatesOnly(true);  // the JSON output keeps every repetition
     }
   }
@@ -276,8 +234,9 @@ int main(int argc, char** argv) {
   for (int i = 1; i < count; ++i) {
     if (std::strncmp(args[i], "--configs=", 10) == 0) {
       configs_dir() = args[i] + 10;
-    } else {
-      std::fprintf(stderr, "bench_tat: unknown argument '%s' (--configs=DIR or --benchmark_* flags)\n", args[i]);
+    } else if (!nec::bench::take_profile_ops_flag(args[i])) {
+      std::fprintf(stderr, "bench_tat: unknown argument '%s' (--configs=DIR, --profile_ops=DIR or --benchmark_* flags)\n",
+                   args[i]);
       return 2;
     }
   }

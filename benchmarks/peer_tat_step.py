@@ -7,34 +7,35 @@ created in the same order (so the same torch.manual_seed gives the same
 initial weights), the same forward, the same losses, and the step of
 TatTrainer::step (zero_grad, backward, clip_grad_norm_, AdamW at the scheduled
 learning rate) on the synthetic batch of benchmarks/bench_tat.cpp, drawn with
-the same torch random calls. Its first two losses therefore equal bench_tat's
+the same torch random calls. Linear layers compute as LibTorch's do
+(peer_layers.Linear). Its first two losses therefore equal bench_tat's
 counters loss_step0 / loss_step1 up to float rounding, which scripts/bench.sh
 checks.
 
     /usr/bin/python3 benchmarks/peer_tat_step.py --expect-parameters N [--joints 22 100] [--threads 1 2]
         [--configs DIR]   # tat_cpu.json and owo_cpu.json, as bench_tat --configs=DIR
+        [--profile-ops DIR]   # one more step per setting under the op profiler, as bench_tat --profile_ops=DIR
 
 Prints one JSON object on stdout (per setting: wall-clock and process CPU
 time per step in ms over the repetitions, the first losses, parameter count,
 peak memory of a step); exits 1 when the parameter count differs from
---expect-parameters (the count bench_tat reports).
+--expect-parameters (the count bench_tat reports). Runs with nec's allocator
+policy and shares its measurement with the other peers (peer_step.py).
 """
 import argparse
-import ctypes
 import json
 import math
 import os
-import re
-import statistics
 import sys
-import time
 
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from peer_layers import Linear
+from peer_step import add_arguments, keep_large_allocations_in_heap, print_json, run_settings
+
 SEED = 0                 # torch.manual_seed before inputs and model, as bench_tat
-WARMUP_STEPS = 2         # untimed steps before a J's first measurement, as bench_tat
 RESIDUAL_DILATION = 3    # tokenizer.cpp kResidualDilation
 FEED_FORWARD_MULT = 2    # tokenizer.cpp kFeedForwardMult
 MASKED_SCORE = -1e9      # tokenizer.cpp kMaskedScore
@@ -150,11 +151,11 @@ class SpatialAttention(nn.Module):
         super().__init__()
         self.heads = heads
         self.attention_norm = nn.LayerNorm(dim)
-        self.qkv = nn.Linear(dim, 3 * dim)
-        self.out = nn.Linear(dim, dim)
+        self.qkv = Linear(dim, 3 * dim)
+        self.out = Linear(dim, dim)
         self.ffn_norm = nn.LayerNorm(dim)
-        self.ffn_in = nn.Linear(dim, FEED_FORWARD_MULT * dim)
-        self.ffn_out = nn.Linear(FEED_FORWARD_MULT * dim, dim)
+        self.ffn_in = Linear(dim, FEED_FORWARD_MULT * dim)
+        self.ffn_out = Linear(FEED_FORWARD_MULT * dim, dim)
 
     def forward(self, x, key_bias, first_token_only=False):
         """x (B, T, N, D); key_bias (B, 1, 1, 1, N) -> (B, T, N or 1, D)."""
@@ -202,9 +203,9 @@ class NecEncoder(nn.Module):
     def __init__(self, c):
         super().__init__()
         d = c["dim"]
-        self.input = nn.Sequential(nn.Linear(MODEL_CHANNELS, d), nn.ReLU(), nn.Linear(d, d))  # built in this order, as tokenizer.cpp
-        self.embedding = nn.Linear(c["joint_embedding_dim"], d)
-        self.rise = nn.Linear(1, d)
+        self.input = nn.Sequential(Linear(MODEL_CHANNELS, d), nn.ReLU(), Linear(d, d))  # built in this order, as tokenizer.cpp
+        self.embedding = Linear(c["joint_embedding_dim"], d)
+        self.rise = Linear(1, d)
         self.virtual_joint = nn.Parameter(torch.randn(d) * 0.02)
         self.temporal = nn.ModuleList()
         self.spatial = nn.ModuleList()
@@ -214,7 +215,7 @@ class NecEncoder(nn.Module):
                 self.spatial.append(SpatialAttention(d, c["heads"]))
         self.attention_layers = c["attention_layers"]
         self.final_norm = nn.LayerNorm(d)
-        self.to_latent = nn.Linear(d, c["code_dim"])
+        self.to_latent = Linear(d, c["code_dim"])
 
     def forward(self, features, joint_mask, joint_embeddings):
         """Model space (B, T, J, MODEL_CHANNELS) -> latent (B, T / r, C)."""
@@ -237,10 +238,10 @@ class NecDecoder(nn.Module):
     def __init__(self, c):
         super().__init__()
         d, code_dim = c["dim"], c["code_dim"]
-        self.virtual_from_latent = nn.Linear(code_dim, d)
-        self.joint_from_latent = nn.Linear(code_dim, d)
-        self.joint_from_embedding = nn.Linear(c["joint_embedding_dim"], d, bias=False)
-        self.joint_hidden = nn.Linear(d, d)
+        self.virtual_from_latent = Linear(code_dim, d)
+        self.joint_from_latent = Linear(code_dim, d)
+        self.joint_from_embedding = Linear(c["joint_embedding_dim"], d, bias=False)
+        self.joint_hidden = Linear(d, d)
         self.spatial = nn.ModuleList()
         self.temporal = nn.ModuleList()
         for _ in range(c["blocks"]):
@@ -248,8 +249,8 @@ class NecDecoder(nn.Module):
                 self.spatial.append(SpatialAttention(d, c["heads"]))
             self.temporal.append(UpBlock(d))
         self.attention_layers = c["attention_layers"]
-        self.output = nn.Linear(d, MODEL_CHANNELS)
-        self.path = nn.Linear(d, 4)
+        self.output = Linear(d, MODEL_CHANNELS)
+        self.path = Linear(d, 4)
 
     def forward(self, quantized, joint_mask, joint_embeddings):
         """(B, S, C) -> model space (B, S r, J, MODEL_CHANNELS), zero at padded joints."""
@@ -617,73 +618,19 @@ class Trainee:
         return total.item()
 
 
-def status_kib(field):
-    with open("/proc/self/status") as f:
-        match = re.search(rf"^{field}:\s+(\d+)", f.read(), re.MULTILINE)
-    return int(match.group(1)) if match else -1
-
-
-def measure_peak_rss(region):
-    """(peak RSS above the start, peak RSS) in MiB of region(), as bench_tat measure_peak_rss."""
-    ctypes.CDLL("libc.so.6").malloc_trim(0)
-    with open("/proc/self/clear_refs", "w") as f:
-        f.write("5")
-    start = status_kib("VmRSS")
-    region()
-    peak = status_kib("VmHWM")
-    return (peak - start) / 1024.0, peak / 1024.0
-
-
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--configs", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "configs"),
-                        help="folder with tat_cpu.json and owo_cpu.json (default: the repository's configs/)")
+    add_arguments(parser, "tat_cpu.json and owo_cpu.json", default_repetitions=5)
     parser.add_argument("--joints", type=int, nargs="+", default=[22, 100], help="skeleton sizes (default: 22 100)")
     parser.add_argument("--iterations", type=int, nargs="+", default=[3, 1],
                         help="timed steps per repetition, one per --joints value (default: 3 1, as bench_tat)")
-    parser.add_argument("--threads", type=int, nargs="+", default=[1, 2], help="torch threads (default: 1 2)")
-    parser.add_argument("--repetitions", type=int, default=5, help="repetitions per setting (default: 5)")
-    parser.add_argument("--expect-parameters", type=int, default=None,
-                        help="parameter count bench_tat reported; exit 1 when this model's differs")
     args = parser.parse_args()
     if len(args.iterations) != len(args.joints):
         parser.error("give one --iterations value per --joints value")
-
+    keep_large_allocations_in_heap()
     c = read_config(args.configs)
-    result = {"torch": torch.__version__, "python": sys.version.split()[0], "repetitions": args.repetitions,
-              "runs": []}
-    for joints, iterations in zip(args.joints, args.iterations):
-        torch.set_num_threads(1)  # model, first losses and memory at one thread, as bench_tat
-        t = Trainee(c, joints)
-        print(f"peer_tat_step: parameters: python {t.parameters}, bench_tat "
-              f"{args.expect_parameters if args.expect_parameters is not None else '(not given)'}", file=sys.stderr)
-        if args.expect_parameters is not None and t.parameters != args.expect_parameters:
-            print(f"peer_tat_step: parameter count {t.parameters} differs from bench_tat's {args.expect_parameters}: "
-                  "the re-implementation is not the same architecture", file=sys.stderr)
-            sys.exit(1)
-        result["parameters"] = t.parameters
-        first_losses = [t.step() for _ in range(WARMUP_STEPS)]
-        step_peak, rss_peak = measure_peak_rss(t.step)
-        for threads in args.threads:
-            torch.set_num_threads(threads)
-            times, cpu_times = [], []
-            for _ in range(args.repetitions):
-                start, cpu_start = time.perf_counter(), time.process_time()
-                for _ in range(iterations):
-                    t.step()
-                times.append((time.perf_counter() - start) / iterations * 1e3)
-                cpu_times.append((time.process_time() - cpu_start) / iterations * 1e3)
-            run = {"joints": joints, "threads": threads, "iterations": iterations,
-                   "median_ms": statistics.median(times), "min_ms": min(times), "max_ms": max(times),
-                   "times_ms": times, "cpu_median_ms": statistics.median(cpu_times), "cpu_times_ms": cpu_times,
-                   "loss_step0": first_losses[0], "loss_step1": first_losses[1],
-                   "step_peak_MiB": step_peak, "rss_peak_MiB": rss_peak}
-            result["runs"].append(run)
-            print(f"peer_tat_step: joints {joints} threads {threads}: median {run['median_ms']:.1f} ms "
-                  f"({run['min_ms']:.1f}-{run['max_ms']:.1f}), first losses {first_losses[0]:.6f} "
-                  f"{first_losses[1]:.6f}", file=sys.stderr)
-    json.dump(result, sys.stdout, indent=1)
-    print()
+    settings = [({"joints": joints}, iterations) for joints, iterations in zip(args.joints, args.iterations)]
+    print_json(run_settings("tat", settings, lambda setting: Trainee(c, setting["joints"]), args))
 
 
 if __name__ == "__main__":

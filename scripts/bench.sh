@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the Google Benchmark programs (build-bench/, Release), times them next
 # to their peers in the same run and prints Markdown tables of medians.
-#   scripts/bench.sh                 # both sections below
+#   scripts/bench.sh                 # every section below but assets
 #   scripts/bench.sh motion [FILE.bvh ...]
 #       BVH parsing and FK against three.js BVHLoader.parse, on the MANN dog
 #       takes (../shared/data/mann_dog), else the Debian CMU files, or FILEs.
@@ -11,24 +11,37 @@
 #       Tokenizer training step (configs/tat_cpu.json, 22 and 100 joints, 1 and
 #       2 threads) against the same step in PyTorch / Python
 #       (benchmarks/peer_tat_step.py, Debian python3-torch), whole-clip encode /
-#       decode throughput and the step's peak memory. Goal: the C++ step takes
-#       at most the Python step's time. About 4 minutes on an idle 2-core machine.
-#       Runs with OMP_WAIT_POLICY=passive unless the variable is set.
+#       decode throughput and the step's peak memory. About 4 minutes.
 #   scripts/bench.sh evaluator
-#       The text-motion evaluator (configs/evaluator_cpu.json): captions encoded
-#       per second, clips embedded per second (22 and 100 joints), and a
-#       retrieval query over a 10,000-clip index (goal: < 20 ms on 2 cores).
+#       The text-motion evaluator (configs/evaluator_cpu.json): its training step
+#       against benchmarks/peer_evaluator_step.py (22 and 100 joints, 1 and 2
+#       threads); captions encoded per second, clips embedded per second (22 and
+#       100 joints), and a retrieval query over a 10,000-clip index (goal: < 20 ms
+#       on 2 cores).
 #   scripts/bench.sh gpt
-#       Generation: a 4-s motion from text to BVH on disk with the default GPT
-#       (one sample, goal < 0.5 s; 32 samples, goal < 3 s), and sampled tokens
-#       per second with and without the KV cache at 4, 16 and 64 s.
+#       The GPT's training step against benchmarks/peer_gpt_step.py (1 and 2
+#       threads); generation: a 4-s motion from text to BVH on disk with the
+#       default GPT (one sample, goal < 0.5 s; 32 samples, goal < 3 s), and
+#       sampled tokens per second with and without the KV cache at 4, 16 and 64 s.
 #   scripts/bench.sh diffusion
-#       The diffusion model (configs/diffusion_pose_cpu.json's denoiser, random
-#       weights): a 4-s motion at 50 DDIM steps with guidance, one sample (goal
-#       < 3 s on 2 cores) and a batch of 8, peak memory; and one layer's
-#       factorized attention against full spatio-temporal attention for
-#       J = 20, 60, 140 joints and T = 60, 120, 240 frames. About 10 minutes.
-#       OpenMP's default wait policy (as nec runs) unless OMP_WAIT_POLICY is set.
+#       The diffusion model's training steps (pose and motion stage, 22 and 100
+#       joints, 1 and 2 threads) against benchmarks/peer_diffusion_step.py;
+#       sampling (configs/diffusion_pose_cpu.json's denoiser, random weights): a
+#       4-s motion at 50 DDIM steps with guidance, one sample (goal < 3 s on 2
+#       cores) and a batch of 8, peak memory; and one layer's factorized
+#       attention against full spatio-temporal attention for J = 20, 60, 140
+#       joints and T = 60, 120, 240 frames. About 15 minutes.
+#       Sampling runs with OpenMP's default wait policy (as nec runs) unless
+#       OMP_WAIT_POLICY is set.
+#   scripts/bench.sh steps
+#       The four training steps above against their peers, nothing else.
+#   Training steps: C++ and Python take turns in 2 rounds; goal: the C++ step
+#   takes at most 0.7 of the Python step's wall-clock time (median); both sides'
+#   first two losses must agree (they run the same computation on the same
+#   inputs and weights); both run with nec's allocator policy and
+#   OMP_WAIT_POLICY=passive unless set. The last round profiles one more step
+#   per setting on both sides (benchmarks/train_step_support.h, peer_step.py):
+#   op calls, time inside and outside ATen, the ops of largest self time.
 #   scripts/bench.sh process
 #       Commands as a user runs them, start to exit, median of 5 with a warm file
 #       cache, and their peak RSS (benchmarks/process_times.py): nec generate with
@@ -42,15 +55,16 @@
 #       (tests/interop/blender_export_assets.py; installs blender), frames/s and
 #       MB/s; and writing a motion onto an asset as GLB (ms).
 # Raw results in build-bench/: bench_motion.json, bench_motion_parse{1,2,3}.json, peer_threejs{1,2,3}.json,
-# bench_tat_step{1,2}.json, peer_tat_step{1,2}.json, bench_tat_clip.json, bench_evaluator.json, bench_gpt.json,
-# bench_diffusion.json, bench_assets.json, process_times.json
+# bench_NAME_step{1,2}.json and peer_NAME_step{1,2}.json (NAME: tat, evaluator, gpt, diffusion), profiles/,
+# bench_tat_clip.json, bench_evaluator.json, bench_gpt.json, bench_diffusion.json, bench_assets.json,
+# process_times.json
 # (NEC_BENCH_BUILD=DIR builds and writes in DIR instead).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 section=all
 case "${1:-}" in
-  motion | tat | evaluator | gpt | diffusion | process | assets) section=$1; shift ;;
+  motion | tat | steps | evaluator | gpt | diffusion | process | assets) section=$1; shift ;;
 esac
 if [ "$section" != motion ] && [ "$section" != all ] && [ $# -gt 0 ]; then
   echo "bench.sh: '$section' takes no arguments" >&2
@@ -58,8 +72,8 @@ if [ "$section" != motion ] && [ "$section" != all ] && [ $# -gt 0 ]; then
 fi
 build=${NEC_BENCH_BUILD:-build-bench}
 python=/usr/bin/python3  # Debian's, the one python3-torch installs into
-tat_rounds=2             # turns of C++ and Python training-step runs
-tat_repetitions=3        # repetitions per program and round
+step_rounds=2            # turns of C++ and Python training-step runs
+step_repetitions=3       # repetitions per program and round
 motion_rounds=3          # turns of nec and three.js parsing runs
 
 source scripts/lib.sh
@@ -142,127 +156,109 @@ Ratio: median ${median(ratios).toFixed(1)}x (goal >= 20x: ${verdict(median(ratio
 JS
 }
 
-bench_tat() {
+# train_step_against_peer NAME FAMILY TITLE CONFIG...: the training step of bench_NAME's FAMILY benchmark
+# against benchmarks/peer_NAME_step.py, both reading one snapshot of the CONFIG files (so that a change in
+# configs/ meanwhile falls on neither), in $step_rounds turns; tables by benchmarks/train_step_report.py.
+train_step_against_peer() {
+  local name=$1 family=$2 title=$3 parameters="" round load_before load_after
+  shift 3
   ensure_packages bench python3-torch
-  cmake --build "$build" --target bench_tat
-  # Both sides read one snapshot of the configs, even if configs/ changes meanwhile.
-  local configs="$build"/bench_tat_configs
+  cmake --build "$build" --target "bench_$name"
+  local configs="$build/bench_${name}_configs"
   mkdir -p "$configs"
-  cp configs/tat_cpu.json configs/owo_cpu.json "$configs"/
+  cp "$@" "$configs"/
   # Idle OpenMP threads sleep instead of spinning: with spinning, two threads on
   # a 2-core machine that also runs anything else wait out whole time slices at
   # every parallel region (here 10x slower steps than one thread, both sides).
   local -x OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
-  local load_before load_after parameters="" round
   load_before=$(cut -d' ' -f1-3 /proc/loadavg)
-  # Training step: C++ and Python take turns, so that a change in the machine's
-  # load between them falls on both; medians pool the rounds' repetitions.
-  for round in $(seq 1 "$tat_rounds"); do
-    "$build"/benchmarks/bench_tat --configs="$configs" --benchmark_filter=TrainStep \
-      --benchmark_repetitions="$tat_repetitions" --benchmark_format=console \
-      --benchmark_out="$build"/bench_tat_step$round.json --benchmark_out_format=json
+  # C++ and Python take turns, so that a change in the machine's load between them falls on both.
+  # The last round also profiles one more step per setting on both sides (after the timed ones).
+  local profiles="$build/profiles" profile_nec=() profile_peer=()
+  rm -rf "$profiles"
+  for round in $(seq 1 "$step_rounds"); do
+    if [ "$round" = "$step_rounds" ]; then
+      profile_nec=(--profile_ops="$profiles")
+      profile_peer=(--profile-ops "$profiles")
+    fi
+    "$build/benchmarks/bench_$name" --configs="$configs" --benchmark_filter="$family" \
+      --benchmark_repetitions="$step_repetitions" --benchmark_format=console "${profile_nec[@]}" \
+      --benchmark_out="$build/bench_${name}_step$round.json" --benchmark_out_format=json
     if [ -z "$parameters" ]; then
       parameters=$("$python" -c 'import json, sys
 rows = json.load(open(sys.argv[1]))["benchmarks"]
-print(int(next(r["parameters"] for r in rows if r["name"].startswith("BM_TatTrainStep"))))' \
-        "$build"/bench_tat_step$round.json)
+print(int(next(r["parameters"] for r in rows if r["name"].startswith(sys.argv[2]))))' \
+        "$build/bench_${name}_step$round.json" "$family")
     fi
-    "$python" benchmarks/peer_tat_step.py --configs "$configs" --expect-parameters "$parameters" \
-      --repetitions "$tat_repetitions" >"$build"/peer_tat_step$round.json
+    "$python" "benchmarks/peer_${name}_step.py" --configs "$configs" --expect-parameters "$parameters" \
+      --repetitions "$step_repetitions" "${profile_peer[@]}" >"$build/peer_${name}_step$round.json"
   done
-  "$build"/benchmarks/bench_tat --configs="$configs" --benchmark_filter=Clip --benchmark_format=console \
-    --benchmark_out="$build"/bench_tat_clip.json --benchmark_out_format=json
   load_after=$(cut -d' ' -f1-3 /proc/loadavg)
+  local nec_files=() peer_files=()
+  for round in $(seq 1 "$step_rounds"); do
+    nec_files+=("$build/bench_${name}_step$round.json")
+    peer_files+=("$build/peer_${name}_step$round.json")
+  done
+  "$python" benchmarks/train_step_report.py --family "$family" --title "$title" \
+    --nec "${nec_files[@]}" --peer "${peer_files[@]}" \
+    --load-before "$load_before" --load-after "$load_after" --wait-policy "$OMP_WAIT_POLICY"
+  local profile setting
+  for profile in "$profiles/${family}"_*.json; do
+    setting=${profile#"$profiles/${family}_"}
+    setting=${setting%.json}
+    "$python" benchmarks/op_profile_report.py --title "$family, ${setting//_/ }" \
+      "$profile" "$profiles/peer_${name}_step_$setting.json"
+  done
+}
 
-  "$python" - "$build" "$tat_rounds" "$load_before" "$load_after" "$OMP_WAIT_POLICY" <<'PY'
-import json, re, statistics, sys
+tat_step() {
+  train_step_against_peer tat BM_TatTrainStep "Tokenizer, configs/tat_cpu.json, batch of 16 x 64 frames" \
+    configs/tat_cpu.json configs/owo_cpu.json
+}
 
-build, rounds, load_before, load_after, wait_policy = sys.argv[1], int(sys.argv[2]), *sys.argv[3:]
-def load(name):
-    with open(f"{build}/{name}") as f:
-        return json.load(f)
-steps = [row for k in range(1, rounds + 1) for row in load(f"bench_tat_step{k}.json")["benchmarks"]]
-clips = load("bench_tat_clip.json")["benchmarks"]
-peers = [load(f"peer_tat_step{k}.json") for k in range(1, rounds + 1)]
+evaluator_step() {
+  train_step_against_peer evaluator BM_EvaluatorTrainStep \
+    "Evaluator, configs/evaluator_cpu.json, batch of 64 x 64 frames, synthetic use-lite captions" \
+    configs/evaluator_cpu.json configs/owo_cpu.json
+}
 
-def matching(rows, name, joints, threads):
-    pattern = rf"{name}/joints:{joints}/threads:{threads}/"
-    found = [row for row in rows if re.match(pattern, row["name"])]
-    if not found:
-        raise SystemExit(f"bench.sh: no {pattern} in bench_tat's output")
-    return found
+gpt_step() {
+  train_step_against_peer gpt BM_GptTrainStep \
+    "GPT, configs/gpt_cpu.json (codes of configs/tat_cpu.json), batch of 32 crops of up to 47 steps" \
+    configs/gpt_cpu.json configs/tat_cpu.json configs/owo_cpu.json
+}
 
-def nec_steps(joints, threads):  # every repetition of every round
-    return [row for row in matching(steps, "BM_TatTrainStep", joints, threads) if row["run_type"] == "iteration"]
+diffusion_step() {
+  train_step_against_peer diffusion BM_DiffusionTrainStep \
+    "Diffusion, configs/diffusion_{pose,motion}_cpu.json (motion stage: batch of 4 x 120 frames; pose stage: 32 x 64)" \
+    configs/diffusion_pose_cpu.json configs/diffusion_motion_cpu.json configs/owo_cpu.json
+}
 
-def nec_times(joints, threads, field):  # ms per step
-    return [row[field] for row in nec_steps(joints, threads)]
-
-def peer_runs(joints, threads):
-    return [r for peer in peers for r in peer["runs"] if r["joints"] == joints and r["threads"] == threads]
-
-def peer_times(joints, threads, field):
-    return [t for r in peer_runs(joints, threads) for t in r[field]]
-
-def verdict(ok):
-    return "met" if ok else "MISSED"
-
-first = nec_steps(22, 1)[0]
-repetitions = len(nec_times(22, 1, "real_time"))
-turns = f"{rounds} round{'s' if rounds > 1 else ''}, C++ and Python in turn"
-print(f"""
-Tokenizer, configs/tat_cpu.json ({first['parameters']:.0f} parameters in both), batch of 16 x 64 frames;
-median of {repetitions} repetitions ({turns}); torch {peers[0]['torch']} (Debian), Python {peers[0]['python']};
-load average (1, 5, 15 min) {load_before} before, {load_after} after; OMP_WAIT_POLICY={wait_policy}.
-Wall clock decides the goal; CPU time (all threads of the process) is less sensitive to other load.
-
-| training step | C++ (ms) | min-max | Python (ms) | min-max | C++ / Python | goal <= 1 | CPU: C++ / Python (ms) |
-|---|---:|---|---:|---|---:|---|---|""")
-for joints, threads in [(joints, threads) for joints in (22, 100) for threads in (1, 2)]:
-    nec, peer = nec_times(joints, threads, "real_time"), peer_times(joints, threads, "times_ms")
-    nec_cpu = statistics.median(nec_times(joints, threads, "cpu_time"))
-    peer_cpu = statistics.median(peer_times(joints, threads, "cpu_times_ms"))
-    ratio = statistics.median(nec) / statistics.median(peer)
-    print(f"| {joints} joints, {threads} thread{'s' if threads > 1 else ''} | {statistics.median(nec):.1f} | "
-          f"{min(nec):.1f}-{max(nec):.1f} | {statistics.median(peer):.1f} | {min(peer):.1f}-{max(peer):.1f} | "
-          f"{ratio:.2f} | {verdict(ratio <= 1.0)} | {nec_cpu:.0f} / {peer_cpu:.0f} = {nec_cpu / peer_cpu:.2f} |")
-
-print("""
-| same step, same inputs (first round) | C++ | Python | relative difference |
-|---|---:|---:|---:|""")
-worst = 0.0
-for joints in (22, 100):
-    row, run = nec_steps(joints, 1)[0], peer_runs(joints, 1)[0]
-    for key in ("loss_step0", "loss_step1"):
-        print(f"| {joints} joints, {key.replace('_', ' ')} | {row[key]:.6f} | {run[key]:.6f} | "
-              f"{abs(row[key] - run[key]) / max(abs(run[key]), 1e-12):.1e} |")
-    for other in nec_steps(joints, 1) + peer_runs(joints, 1):
-        for key in ("loss_step0", "loss_step1"):
-            worst = max(worst, abs(other[key] - run[key]) / max(abs(run[key]), 1e-12))
-    print(f"| {joints} joints, peak RSS of a step above its start (MiB) | {row['step_peak_MiB']:.1f} | "
-          f"{run['step_peak_MiB']:.1f} | |")
-    print(f"| {joints} joints, process peak RSS during it (MiB) | {row['rss_peak_MiB']:.1f} | "
-          f"{run['rss_peak_MiB']:.1f} | |")
-
+bench_tat() {
+  tat_step
+  OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive} "$build"/benchmarks/bench_tat --configs="$build"/bench_tat_configs \
+    --benchmark_filter=Clip --benchmark_format=console \
+    --benchmark_out="$build"/bench_tat_clip.json --benchmark_out_format=json
+  "$python" - "$build"/bench_tat_clip.json <<'PY'
+import sys
+sys.path.insert(0, "benchmarks")
+from bench_json import BenchRows
+median = BenchRows(sys.argv[1]).median
 print("""
 | whole clip, 600 frames, C++ (median) | frames/s, 1 thread | frames/s, 2 threads |
 |---|---:|---:|""")
 for name, label in (("BM_TatEncodeClip", "encode_clip"), ("BM_TatDecodeClip", "decode_clip")):
     for joints in (22, 100):
-        rates = [next(row["frames_per_s"] for row in matching(clips, name, joints, threads)
-                      if row.get("aggregate_name") == "median") for threads in (1, 2)]
+        rates = [median(f"{name}/joints:{joints}/threads:{threads}", "frames_per_s") for threads in (1, 2)]
         print(f"| {label}, {joints} joints | {rates[0]:.0f} | {rates[1]:.0f} |")
 print()
-if worst > 1e-3:
-    raise SystemExit(f"bench.sh: the Python peer's first losses differ from bench_tat's by {worst:.1e} (relative); "
-                     "they run the same computation on the same inputs and agree to float rounding unless "
-                     "benchmarks/peer_tat_step.py no longer matches tat/src")
 PY
 }
 
 bench_evaluator() {
-  cmake --build "$build" --target bench_evaluator
-  OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive} "$build"/benchmarks/bench_evaluator --benchmark_format=console \
+  evaluator_step
+  OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive} "$build"/benchmarks/bench_evaluator --benchmark_filter=-TrainStep \
+    --benchmark_format=console \
     --benchmark_out="$build"/bench_evaluator.json --benchmark_out_format=json >/dev/null
   "$python" - "$build"/bench_evaluator.json <<'PY'
 import sys
@@ -286,8 +282,9 @@ PY
 }
 
 bench_gpt() {
-  cmake --build "$build" --target bench_gpt
-  OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive} "$build"/benchmarks/bench_gpt --benchmark_format=console \
+  gpt_step
+  OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive} "$build"/benchmarks/bench_gpt --benchmark_filter=-TrainStep \
+    --benchmark_format=console \
     --benchmark_out="$build"/bench_gpt.json --benchmark_out_format=json >/dev/null
   "$python" - "$build"/bench_gpt.json <<'PY'
 import sys
@@ -309,11 +306,11 @@ PY
 }
 
 bench_diffusion() {
-  cmake --build "$build" --target bench_diffusion
+  diffusion_step
   # Timed as `nec generate` runs: nec sets no OpenMP wait policy (the default lets a thread spin briefly
   # between the many small operations of a step); OMP_WAIT_POLICY=passive scripts/bench.sh diffusion times
   # the other.
-  "$build"/benchmarks/bench_diffusion --benchmark_format=console \
+  "$build"/benchmarks/bench_diffusion --benchmark_filter=-TrainStep --benchmark_format=console \
     --benchmark_out="$build"/bench_diffusion.json --benchmark_out_format=json >/dev/null
   "$python" - "$build"/bench_diffusion.json "${OMP_WAIT_POLICY:-default}" <<'PY'
 import sys
@@ -402,6 +399,7 @@ case "$section" in
   motion) bench_motion "$@" ;;
   assets) bench_assets ;;
   tat) bench_tat ;;
+  steps) tat_step; evaluator_step; gpt_step; diffusion_step ;;
   evaluator) bench_evaluator ;;
   gpt) bench_gpt ;;
   diffusion) bench_diffusion ;;

@@ -270,7 +270,9 @@ TEST(DiffusionSampling, SamplesRepeatBySeedSampleBySample) {
   const auto one = diffusion::sample_motions(*model, schedule, skeleton, captions.narrow(0, 0, 1), {12}, 1, options);
   ASSERT_EQ(two.size(), 2u);
   EXPECT_EQ(two[0].sizes(), (std::vector<int64_t>{12, 5, kC}));
-  EXPECT_LT(max_difference(two[1], one[0]), 1e-5);
+  // Rounding only: a batch of two goes through other BLAS blockings than one sample, and five denoising steps
+  // amplify the difference (1.0e-5 seen); a mixed-up seed or sample differs by the motion's own scale.
+  EXPECT_LT(max_difference(two[1], one[0]), 5e-5);
   EXPECT_GT(max_difference(two[0], two[1]), 1e-3);
   // Channels a joint does not use stay 0.
   EXPECT_EQ(two[0].narrow(1, 1, 4).narrow(2, 0, 3).abs().max().item<float>(), 0.0f);

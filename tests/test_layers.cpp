@@ -1,5 +1,6 @@
 // layers/: batched_matmul against torch::bmm (values and both gradients, on
-// two threads, with a transposed operand and an odd batch), and the
+// two threads, with a transposed operand and an odd batch; small operands,
+// which run nec's own loop, and large ones, which split bmm), and the
 // multi-head attention against the formula head by head, with a masked key.
 #include "nec/layers/batched_matmul.h"
 #include "nec/layers/transformer.h"
@@ -70,6 +71,32 @@ TEST_F(TwoThreads, BatchedMatmulWithoutGradientsInInferenceModeAndOnOneThread) {
   }
   at::set_num_threads(1);
   EXPECT_LT(max_difference(layers::batched_matmul(a, b), torch::bmm(a, b)), 1e-5);
+}
+
+TEST_F(TwoThreads, BatchedMatmulOfLargeOperandsIsBmmWithItsGradients) {
+  // A right operand of 200 x 100 floats is above the small-product loop's limit: bmm split over the threads.
+  const at::Tensor a = torch::randn({3, 8, 200}, torch::requires_grad());
+  const at::Tensor b = torch::randn({3, 200, 100}, torch::requires_grad());
+  const at::Tensor ours = layers::batched_matmul(a, b);
+  const auto g = torch::autograd::grad({ours.pow(2).sum()}, {a, b});
+  const at::Tensor reference = torch::bmm(a, b);
+  const auto expected = torch::autograd::grad({reference.pow(2).sum()}, {a, b});
+  EXPECT_LT(max_difference(ours, reference), 1e-4);
+  EXPECT_LT(max_difference(g[0], expected[0]), 1e-3);
+  EXPECT_LT(max_difference(g[1], expected[1]), 1e-3);
+}
+
+TEST_F(TwoThreads, SmallProductsDoNotDependOnTheThreadCountOrTheBatch) {
+  // Each product sums in one order whatever the threads or the other matrices: a sample's attention is the same
+  // alone and in a batch, on one thread and on two.
+  const at::Tensor a = torch::randn({64, 23, 32}), b = torch::randn({64, 32, 23});
+  const at::Tensor two_threads = layers::batched_matmul(a, b);
+  const at::Tensor one_item = layers::batched_matmul(a.narrow(0, 5, 1), b.narrow(0, 5, 1));
+  at::set_num_threads(1);
+  const at::Tensor one_thread = layers::batched_matmul(a, b);
+  EXPECT_TRUE(torch::equal(two_threads, one_thread));
+  EXPECT_TRUE(torch::equal(two_threads.narrow(0, 5, 1), one_item));
+  EXPECT_LT(max_difference(one_thread, torch::bmm(a, b)), 1e-4);
 }
 
 TEST_F(TwoThreads, AttentionIsTheFormulaPerHeadAndIgnoresMaskedKeys) {

@@ -1,6 +1,8 @@
 // Diffusion training: config file, the two stages' steps, validation, checkpoints, resume.
 #include "nec/diffusion/training.h"
 
+#include "nec/diffusion/objective.h"
+
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/motion/random.h"
@@ -150,7 +152,7 @@ DiffusionTrainer::DiffusionTrainer(const DiffusionTrainConfig& config, Diffusion
     model_->fit_statistics(motions);
   } else {
     model_ = pose->model;
-    for (at::Tensor& p : model_->pose_parameters()) p.set_requires_grad(false);
+    freeze_pose_model(*model_);
   }
   model_->to(device_);
   train_mode();
@@ -162,15 +164,9 @@ DiffusionTrainer::DiffusionTrainer(const DiffusionTrainConfig& config, Diffusion
 
 DiffusionTrainer::~DiffusionTrainer() = default;
 
-void DiffusionTrainer::train_mode() {
-  model_->train();
-  // The motion stage's frozen caption encoder reads captions as it will in generation (no dropout).
-  if (stage_ == DiffusionStage::kMotion) model_->text_encoder().eval();
-}
+void DiffusionTrainer::train_mode() { set_training_mode(*model_, stage_); }
 
-std::vector<at::Tensor> DiffusionTrainer::trained_parameters() {
-  return stage_ == DiffusionStage::kPose ? model_->pose_parameters() : model_->temporal_parameters();
-}
+std::vector<at::Tensor> DiffusionTrainer::trained_parameters() { return diffusion::trained_parameters(*model_, stage_); }
 
 int64_t DiffusionTrainer::trained_parameter_count() const {
   int64_t count = 0;
@@ -197,31 +193,29 @@ at::Tensor DiffusionTrainer::loss_of(const Batch& batch, bool validation, uint64
     return torch::stack(rows).to(device_);
   };
 
-  at::Tensor motion = model_->standardize(tat::features_to_model_space(x.features));  // (B, T, J, C)
-  at::Tensor frame_mask = x.frame_mask;
-  const bool temporal = stage_ == DiffusionStage::kMotion;
-  if (!temporal) {
+  DenoisingBatch drawn;
+  drawn.skeletons = skeletons;
+  drawn.motion = tat::features_to_model_space(x.features);  // (B, T, J, C)
+  drawn.frame_mask = x.frame_mask;
+  if (stage_ == DiffusionStage::kPose) {
     // Single frames: pose_frames real frames of each item, each a pose of its own.
-    const at::Tensor real_frames = frame_mask.sum(1, /*keepdim=*/true).to(torch::kFloat32);  // (B, 1)
+    const at::Tensor real_frames = drawn.frame_mask.sum(1, /*keepdim=*/true).to(torch::kFloat32);  // (B, 1)
     const at::Tensor picks =
-        (per_item([&](at::Generator& g) { return torch::rand({config_.pose_frames}, g); }) * real_frames).floor().to(torch::kInt64).clamp_max(motion.size(1) - 1);
-    motion = torch::gather(motion, 1, picks.view({b, -1, 1, 1}).expand({b, config_.pose_frames, motion.size(2), motion.size(3)}));
-    frame_mask = torch::ones({b, config_.pose_frames}, frame_mask.options());
+        (per_item([&](at::Generator& g) { return torch::rand({config_.pose_frames}, g); }) * real_frames).floor().to(torch::kInt64).clamp_max(drawn.motion.size(1) - 1);
+    drawn.motion = torch::gather(drawn.motion, 1, picks.view({b, -1, 1, 1}).expand({b, config_.pose_frames, drawn.motion.size(2), drawn.motion.size(3)}));
+    drawn.frame_mask = torch::ones({b, config_.pose_frames}, drawn.frame_mask.options());
   }
-  const at::Tensor used = channel_mask(x.joint_mask).unsqueeze(1) & frame_mask.view({b, -1, 1, 1});
-  // Padding is zero in Θ, which is no rotation: where(), not a product, keeps whatever it maps to out.
-  const at::Tensor x0 = torch::where(used, motion, torch::zeros_like(motion));
-  const at::Tensor t = (per_item([](at::Generator& g) { return torch::rand({1}, g); }).view({-1}) * static_cast<double>(schedule_.steps()))
-                           .floor().to(torch::kInt64).clamp_max(schedule_.steps() - 1);
+  drawn.t = (per_item([](at::Generator& g) { return torch::rand({1}, g); }).view({-1}) * static_cast<double>(schedule_.steps()))
+                .floor().to(torch::kInt64).clamp_max(schedule_.steps() - 1);
   // Noise of the item's own joints, padded: the same whatever the batch's widest skeleton.
+  const int64_t frames = drawn.motion.size(1), width = drawn.motion.size(2), channels = drawn.motion.size(3);
   std::vector<at::Tensor> noises;
   for (int64_t i = 0; i < b; ++i) {
     const int64_t joints = batch.joint_counts[static_cast<size_t>(i)];
-    noises.push_back(torch::constant_pad_nd(torch::randn({x0.size(1), joints, x0.size(3)}, streams[static_cast<size_t>(i)]),
-                                            {0, 0, 0, x0.size(2) - joints}));
+    noises.push_back(torch::constant_pad_nd(torch::randn({frames, joints, channels}, streams[static_cast<size_t>(i)]),
+                                            {0, 0, 0, width - joints}));
   }
-  const at::Tensor noise = torch::stack(noises).to(device_) * used;
-  const at::Tensor x_t = schedule_.add_noise(x0, noise, t);
+  drawn.noise = torch::stack(noises).to(device_);
 
   std::vector<std::string> captions;
   std::vector<int64_t> dropped;
@@ -232,15 +226,10 @@ at::Tensor DiffusionTrainer::loss_of(const Batch& batch, bool validation, uint64
     captions.push_back(caption.empty() ? kPlaceholderCaption : caption);
     dropped.push_back(drop ? 1 : 0);
   }
-  const text::TextBatch text =
-      captions_.read(captions, vectors_, data_name_ + " captions");
-  const at::Tensor condition =
-      model_->caption_condition(text.to(device_), torch::tensor(dropped, torch::kInt64).to(torch::kBool).to(device_));
-  const at::Tensor predicted = model_->forward(x_t, t, condition, skeletons, frame_mask, temporal);
-  const int64_t items = validation ? b : batch.global_size;
-  at::Tensor loss = denoising_loss(predicted, x0, used, items);
-  if (temporal && config_.velocity_weight > 0) loss = loss + config_.velocity_weight * velocity_loss(predicted, x0, used, items);
-  return loss;
+  drawn.text = captions_.read(captions, vectors_, data_name_ + " captions").to(device_);
+  drawn.drop_text = torch::tensor(dropped, torch::kInt64).to(torch::kBool).to(device_);
+  drawn.global_items = validation ? b : batch.global_size;
+  return denoising_objective(*model_, schedule_, drawn, stage_, config_.velocity_weight);
 }
 
 train::LossTerms DiffusionTrainer::step(int64_t step) {

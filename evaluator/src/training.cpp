@@ -91,6 +91,13 @@ at::Tensor contrastive_loss(const at::Tensor& motion, const at::Tensor& text, co
   return 0.5 * (motion_to_text + text_to_motion);
 }
 
+at::Tensor contrastive_batch_loss(EvaluatorImpl& model, const ContrastiveBatch& batch) {
+  const at::Tensor motion =
+      model.embed_motion(batch.features, batch.joint_mask, batch.frame_mask, batch.joint_embeddings);
+  const at::Tensor text = model.embed_text(batch.captions);
+  return contrastive_loss(motion, text, model.logit_scale(), batch.same);
+}
+
 std::vector<int> captioned_clips(const DatasetCache& cache, Split split) {
   std::vector<int> out;
   for (const int clip : cache.clips_in(split)) {
@@ -186,9 +193,8 @@ train::LossTerms EvaluatorTrainer::step(int64_t step) {
     }
     const at::Tensor id_tensor = torch::tensor(ids, torch::kInt64);
     const at::Tensor same = id_tensor.unsqueeze(1) == id_tensor.unsqueeze(0);
-    const at::Tensor motion = model_->embed_motion(x.features, x.joint_mask, x.frame_mask, joints);
-    const at::Tensor text = model_->embed_text(captions.to(device_));
-    const at::Tensor loss = contrastive_loss(motion, text, model_->logit_scale(), same.to(device_));
+    const ContrastiveBatch inputs{x.features, x.joint_mask, x.frame_mask, joints, captions.to(device_), same.to(device_)};
+    const at::Tensor loss = contrastive_batch_loss(*model_, inputs);
     (loss * share).backward();
     loss_value = loss.item<double>() * share;
   }

@@ -1,6 +1,7 @@
 // The text-to-token transformer: condition, teacher-forced forward, cached generation steps.
 #include "nec/gpt/model.h"
 
+#include "nec/layers/batched_matmul.h"
 #include "nec/layers/transformer.h"
 #include "nec/train/config_fields.h"
 
@@ -18,6 +19,14 @@ void require(bool ok, const std::string& message) {
 }
 
 constexpr int64_t kPrefixTokens = 2;  // sentence, skeleton
+
+// (B, H, N, K) x (B, H, K, M) -> (B, H, N, M): one small product per item and head, which
+// layers::batched_matmul does several times faster than torch::matmul's bmm on the CPU.
+at::Tensor per_head_product(const at::Tensor& a, const at::Tensor& b) {
+  const int64_t groups = a.size(0) * a.size(1);
+  return layers::batched_matmul(a.reshape({groups, a.size(2), a.size(3)}), b.reshape({groups, b.size(2), b.size(3)}))
+      .view({a.size(0), a.size(1), a.size(2), b.size(3)});
+}
 
 }  // namespace
 
@@ -94,18 +103,18 @@ class GptBlockImpl : public torch::nn::Module {
     keys = keys.defined() ? torch::cat({keys, split_heads(qkv[1])}, 2) : split_heads(qkv[1]);
     values = values.defined() ? torch::cat({values, split_heads(qkv[2])}, 2) : split_heads(qkv[2]);
     const int64_t before = keys.size(2) - n;
-    at::Tensor scores = torch::matmul(q, keys.transpose(-1, -2)) * scale;  // (B, H, N, before + N)
+    at::Tensor scores = per_head_product(q, keys.transpose(-1, -2)) * scale;  // (B, H, N, before + N)
     if (n > 1) {
       // Token i (at before + i) reads keys 0..before + i.
       const at::Tensor future = torch::ones({n, before + n}, x.options().dtype(torch::kBool)).triu(before + 1);
       scores = scores.masked_fill(future, layers::kMaskedScore);
     }
-    const at::Tensor attended = torch::matmul(torch::softmax(scores, -1), values).transpose(1, 2).reshape({b, n, d});
+    const at::Tensor attended = per_head_product(torch::softmax(scores, -1), values).transpose(1, 2).reshape({b, n, d});
     at::Tensor y = x + dropout_(self_out_(attended));
 
     const at::Tensor cq = split_heads(query_(cross_norm_(y)));
-    const at::Tensor cross_scores = torch::matmul(cq, memory_keys.transpose(-1, -2)) * scale + memory_bias;
-    const at::Tensor read = torch::matmul(torch::softmax(cross_scores, -1), memory_values).transpose(1, 2).reshape({b, n, d});
+    const at::Tensor cross_scores = per_head_product(cq, memory_keys.transpose(-1, -2)) * scale + memory_bias;
+    const at::Tensor read = per_head_product(torch::softmax(cross_scores, -1), memory_values).transpose(1, 2).reshape({b, n, d});
     y = y + dropout_(cross_out_(read));
     return y + ffn_out_(dropout_(torch::gelu(ffn_in_(ffn_norm_(y)))));
   }

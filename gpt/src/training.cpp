@@ -210,20 +210,24 @@ GptBatch GptTrainer::batch(int64_t step, bool whole) const {
   return make_batch(rows, captions, starts, lengths, drops);
 }
 
-GptLoss GptTrainer::loss_of(const GptBatch& batch, int64_t global_items) {
-  const text::TextBatch captions =
-      captions_.read(batch.captions, vectors_, data_name_ + " captions");
+GptLoss teacher_forced_loss(TokenGptImpl& model, const text::TextBatch& captions, const GptBatch& batch,
+                            double token_keep, int64_t global_items, const c10::Device& device) {
   const GptCondition condition =
-      model_->condition(captions.to(device_), batch.skeleton_features.to(device_), batch.drop_text.to(device_));
-  at::Tensor inputs = batch.inputs.to(device_);
-  if (model_->is_training() && config_.token_keep < 1) {
+      model.condition(captions.to(device), batch.skeleton_features.to(device), batch.drop_text.to(device));
+  at::Tensor inputs = batch.inputs.to(device);
+  if (model.is_training() && token_keep < 1) {
     // T2M-GPT's corruption: an input step's codes are replaced by random ones.
-    const at::Tensor replace = torch::rand({inputs.size(0), inputs.size(1), 1}, inputs.options().dtype(torch::kFloat32)) >=
-                               config_.token_keep;
-    inputs = torch::where(replace, torch::randint_like(inputs, config_.model.codebook_size), inputs);
+    const at::Tensor replace =
+        torch::rand({inputs.size(0), inputs.size(1), 1}, inputs.options().dtype(torch::kFloat32)) >= token_keep;
+    inputs = torch::where(replace, torch::randint_like(inputs, model.config().codebook_size), inputs);
   }
-  return gpt_loss(model_->forward(condition, inputs, batch.targets.to(device_)), batch.targets.to(device_),
-                  global_items);
+  const at::Tensor targets = batch.targets.to(device);
+  return gpt_loss(model.forward(condition, inputs, targets), targets, global_items);
+}
+
+GptLoss GptTrainer::loss_of(const GptBatch& batch, int64_t global_items) {
+  const text::TextBatch captions = captions_.read(batch.captions, vectors_, data_name_ + " captions");
+  return teacher_forced_loss(*model_, captions, batch, config_.token_keep, global_items, device_);
 }
 
 train::LossTerms GptTrainer::step(int64_t step) {

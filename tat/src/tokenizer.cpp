@@ -2,6 +2,7 @@
 // zero-padding RVQ-VAE baseline, sharing the temporal blocks and the quantizer.
 #include "nec/tat/tokenizer.h"
 
+#include "nec/layers/batched_matmul.h"
 #include "nec/tat/model_space.h"
 #include "nec/train/config_fields.h"
 
@@ -132,8 +133,15 @@ class SpatialAttentionImpl : public torch::nn::Module {
     // (3, B, T, H, N, Dh) for the keys and values of every token.
     const at::Tensor qkv = qkv_(normalized).view({b, t, n, 3, heads_, head_dim}).permute({3, 0, 1, 4, 2, 5});
     const at::Tensor query = qkv[0].narrow(3, 0, queries) * (1.0 / std::sqrt(static_cast<double>(head_dim)));
-    const at::Tensor scores = torch::matmul(query, qkv[1].transpose(-1, -2)) + key_bias;  // (B, T, H, Q, N)
-    const at::Tensor mixed = torch::matmul(torch::softmax(scores, -1), qkv[2]);          // (B, T, H, Q, Dh)
+    const int64_t groups = b * t * heads_;  // one small product per frame and head
+    const at::Tensor scores =
+        layers::batched_matmul(query.reshape({groups, queries, head_dim}),
+                               qkv[1].transpose(-1, -2).reshape({groups, head_dim, n}))
+            .view({b, t, heads_, queries, n}) +
+        key_bias;  // (B, T, H, Q, N)
+    const at::Tensor mixed = layers::batched_matmul(torch::softmax(scores, -1).view({groups, queries, n}),
+                                                    qkv[2].reshape({groups, n, head_dim}))
+                                 .view({b, t, heads_, queries, head_dim});  // (B, T, H, Q, Dh)
     const at::Tensor attended =
         x.narrow(2, 0, queries) + out_(mixed.permute({0, 1, 3, 2, 4}).reshape({b, t, queries, d}));
     return attended + ffn_out_(torch::gelu(ffn_in_(ffn_norm_(attended))));

@@ -104,6 +104,23 @@ EvaluatorTrainConfig read_evaluator_train_config(const std::string& path);
 at::Tensor contrastive_loss(const at::Tensor& motion, const at::Tensor& text, const at::Tensor& scale,
                             const at::Tensor& same);
 
+// What one contrastive step reads: EvaluatorTrainer::step makes it from its
+// batch (the OwO embeddings of its skeletons, its captions read), synthetic.h
+// from torch's generator.
+struct ContrastiveBatch {
+  at::Tensor features;          // (B, T, J, 9) Θ as batches hold it, zero outside the masks
+  at::Tensor joint_mask;        // (B, J) bool
+  at::Tensor frame_mask;        // (B, T) bool
+  at::Tensor joint_embeddings;  // (B, J, E) of the frozen OwO encoder
+  text::TextBatch captions;     // one caption per item, as the text encoder reads it
+  at::Tensor same;              // (B, B) bool: the matches of contrastive_loss
+};
+
+// The training loss of `model` (in the mode it is in) on `batch`: the motions
+// embedded, then the captions (the order of their dropout draws), and
+// contrastive_loss at the model's logit scale. -> ()
+at::Tensor contrastive_batch_loss(EvaluatorImpl& model, const ContrastiveBatch& batch);
+
 class EvaluatorTrainer {
  public:
   // A fresh evaluator (weights from config.seed; with the pieces backbone,

@@ -88,6 +88,15 @@ struct GptLoss {
 };
 GptLoss gpt_loss(const GptLogits& logits, const at::Tensor& targets, int64_t global_items);
 
+// The loss of a batch whose captions the text backbone has read (`captions`;
+// batch.captions is not read): the condition, then in training mode
+// T2M-GPT's corruption (each input step keeps its codes with chance
+// token_keep, else gets random ones, drawn from torch's generator), the
+// teacher-forced forward and gpt_loss. What GptTrainer's steps and validation
+// compute, and the synthetic step of the benchmark (gpt/synthetic.h).
+GptLoss teacher_forced_loss(TokenGptImpl& model, const text::TextBatch& captions, const GptBatch& batch,
+                            double token_keep, int64_t global_items, const c10::Device& device);
+
 class GptTrainer {
  public:
   // A fresh GPT (weights from config.seed; with the pieces backbone, piece
