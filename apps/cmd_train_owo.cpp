@@ -4,7 +4,6 @@
 #include "training_command.h"
 
 #include "nec/motion/error.h"
-#include "nec/motion/files.h"
 #include "nec/owo/training.h"
 #include "nec/train/config_fields.h"
 
@@ -49,7 +48,7 @@ int run_train_owo(int argc, char** argv) {
   const std::vector<std::string> caches = cli.list("--data");
   if (caches.empty()) throw UsageError("--data needs at least one cache");
 
-  owo::OwoTrainingConfig config = owo::parse_owo_training_config(read_file(config_path, size_t{1} << 24), config_path);
+  owo::OwoTrainingConfig config = owo::read_owo_training_config(config_path);
   if (!cli.value("--steps").empty()) {
     const int steps = cli.integer("--steps");
     if (steps < 1) throw UsageError("--steps must be >= 1");

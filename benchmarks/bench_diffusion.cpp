@@ -63,11 +63,6 @@ constexpr int kRepetitions = 3;
 constexpr int64_t kJoints = 24, kFrames = 120, kDim = 64, kHeads = 4, kQueryChunk = 1024;
 constexpr uint64_t kSeed = 0;        // torch::manual_seed before inputs and model (as the peer)
 
-std::string& configs_dir() {
-  static std::string dir = std::string(NEC_SOURCE_DIR) + "/configs";
-  return dir;
-}
-
 // configs/diffusion_pose_cpu.json's denoiser with every weight random (the zero-initialised gates too).
 struct RandomDenoiser {
   nec::diffusion::MotionDenoiser model{nullptr};
@@ -76,7 +71,7 @@ struct RandomDenoiser {
 
   RandomDenoiser() {
     nec::diffusion::DenoiserConfig config =
-        nec::diffusion::read_diffusion_train_config(configs_dir() + "/diffusion_pose_cpu.json").model;
+        nec::diffusion::read_diffusion_train_config(nec::bench::configs_dir() + "/diffusion_pose_cpu.json").model;
     config.skeleton_dim = 64;
     torch::manual_seed(0);
     model = nec::diffusion::MotionDenoiser(config);
@@ -169,7 +164,7 @@ Trainee& trainee(DiffusionStage stage, int64_t joints) {
   const int threads = torch::get_num_threads();
   torch::set_num_threads(1);
   t.stage = stage;
-  t.config = nec::diffusion::synthetic_stage_config(configs_dir(), stage);
+  t.config = nec::diffusion::synthetic_stage_config(nec::bench::configs_dir(), stage);
   torch::manual_seed(kSeed);
   t.inputs = nec::diffusion::synthetic_diffusion_batch(t.config, stage, joints);
   t.model = nec::diffusion::synthetic_denoiser(t.config, stage, t.inputs);
@@ -225,9 +220,7 @@ int main(int argc, char** argv) {
   torch::set_num_threads(static_cast<int>(std::thread::hardware_concurrency()));  // every core (2 here)
   benchmark::Initialize(&argc, argv);  // removes the --benchmark_* flags it knows
   for (int i = 1; i < argc; ++i) {
-    if (std::strncmp(argv[i], "--configs=", 10) == 0) {
-      configs_dir() = argv[i] + 10;
-    } else if (!nec::bench::take_profile_ops_flag(argv[i])) {
+    if (!nec::bench::take_step_flag(argv[i])) {
       std::fprintf(stderr, "bench_diffusion: unknown argument '%s' (--configs=DIR, --profile_ops=DIR or --benchmark_* flags)\n",
                    argv[i]);
       return 2;

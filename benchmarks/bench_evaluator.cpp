@@ -43,6 +43,7 @@
 #include "nec/evaluator/retrieval_index.h"
 #include "nec/evaluator/synthetic.h"
 #include "nec/evaluator/training.h"
+#include "nec/owo/training.h"
 #include "nec/owo/graph.h"
 #include "nec/owo/pretrain.h"
 #include "nec/tat/inference.h"
@@ -64,7 +65,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <map>
@@ -84,24 +84,14 @@ constexpr int64_t kIndexClips = 10000;
 constexpr uint64_t kSeed = 0;        // torch::manual_seed before the step's inputs and model (as the peer)
 constexpr int64_t kTrainIterations22 = 3, kTrainIterations100 = 1;  // timed steps per repetition (as the peer)
 
-std::string& configs_dir() {
-  static std::string dir = std::string(NEC_SOURCE_DIR) + "/configs";
-  return dir;
-}
-
 // The encoder width of DIR/owo_cpu.json: the joint embeddings the motion encoder reads.
-int64_t owo_dim() {
-  const std::string path = configs_dir() + "/owo_cpu.json";
-  std::ifstream owo(path);
-  if (!owo) throw std::runtime_error("cannot read " + path);
-  return nlohmann::json::parse(owo).at("encoder").at("dim").get<int64_t>();
-}
+int64_t owo_dim() { return nec::owo::read_owo_training_config(nec::bench::configs_dir() + "/owo_cpu.json").encoder.dim; }
 
 // evaluator_cpu.json, joint embeddings as wide as owo_cpu.json's encoder.
 const nec::evaluator::EvaluatorTrainConfig& train_config() {
   static const nec::evaluator::EvaluatorTrainConfig config = [] {
     nec::evaluator::EvaluatorTrainConfig c =
-        nec::evaluator::read_evaluator_train_config(configs_dir() + "/evaluator_cpu.json");
+        nec::evaluator::read_evaluator_train_config(nec::bench::configs_dir() + "/evaluator_cpu.json");
     c.model.motion.joint_embedding_dim = owo_dim();
     c.validate();
     return c;
@@ -374,9 +364,7 @@ int main(int argc, char** argv) {
   int count = static_cast<int>(args.size());
   benchmark::Initialize(&count, args.data());
   for (int i = 1; i < count; ++i) {
-    if (std::strncmp(args[i], "--configs=", 10) == 0) {
-      configs_dir() = args[i] + 10;
-    } else if (!nec::bench::take_profile_ops_flag(args[i])) {
+    if (!nec::bench::take_step_flag(args[i])) {
       std::fprintf(stderr, "bench_evaluator: unknown argument '%s' (--configs=DIR, --profile_ops=DIR or --benchmark_* flags)\n",
                    args[i]);
       return 2;

@@ -34,6 +34,7 @@
 #include "nec/gpt/synthetic.h"
 #include "nec/gpt/training.h"
 #include "nec/motion/bvh.h"
+#include "nec/owo/training.h"
 #include "nec/tat/training.h"
 #include "nec/text/word_vectors.h"
 #include "nec/train/heap.h"
@@ -48,7 +49,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -70,23 +70,15 @@ std::string& model_dir() {
   return dir;
 }
 
-std::string& configs_dir() {
-  static std::string dir = std::string(NEC_SOURCE_DIR) + "/configs";
-  return dir;
-}
-
 // gpt_cpu.json with the codebook of tat_cpu.json and OwO's width of owo_cpu.json, as `nec train gpt` takes them
 // from the tokenizer it is given.
 const nec::gpt::GptTrainConfig& train_config() {
   static const nec::gpt::GptTrainConfig config = [] {
-    nec::gpt::GptTrainConfig c = nec::gpt::read_gpt_train_config(configs_dir() + "/gpt_cpu.json");
-    const nec::tat::TatTrainConfig tat = nec::tat::read_tat_train_config(configs_dir() + "/tat_cpu.json");
+    nec::gpt::GptTrainConfig c = nec::gpt::read_gpt_train_config(nec::bench::configs_dir() + "/gpt_cpu.json");
+    const nec::tat::TatTrainConfig tat = nec::tat::read_tat_train_config(nec::bench::configs_dir() + "/tat_cpu.json");
     c.model.codebook_layers = tat.model.quantizer.layers;
     c.model.codebook_size = tat.model.quantizer.codebook_size;
-    const std::string owo_path = configs_dir() + "/owo_cpu.json";
-    std::ifstream owo(owo_path);
-    if (!owo) throw std::runtime_error("cannot read " + owo_path);
-    c.model.skeleton_dim = nlohmann::json::parse(owo).at("encoder").at("dim").get<int64_t>();
+    c.model.skeleton_dim = nec::owo::read_owo_training_config(nec::bench::configs_dir() + "/owo_cpu.json").encoder.dim;
     c.validate();
     return c;
   }();
@@ -172,7 +164,7 @@ struct RandomGpt {
   nec::gpt::GptCondition condition, unconditioned;
 
   RandomGpt() {
-    nec::gpt::GptConfig config = nec::gpt::read_gpt_train_config(configs_dir() + "/gpt_cpu.json").model;
+    nec::gpt::GptConfig config = nec::gpt::read_gpt_train_config(nec::bench::configs_dir() + "/gpt_cpu.json").model;
     config.codebook_layers = 4;
     config.codebook_size = 256;
     config.skeleton_dim = 64;
@@ -253,11 +245,7 @@ int main(int argc, char** argv) {
       model_dir() = argv[i] + 8;
       continue;
     }
-    if (std::strncmp(argv[i], "--configs=", 10) == 0) {
-      configs_dir() = argv[i] + 10;
-      continue;
-    }
-    if (nec::bench::take_profile_ops_flag(argv[i])) continue;
+    if (nec::bench::take_step_flag(argv[i])) continue;
     if (std::strncmp(argv[i], "--benchmark_repetitions", 23) == 0) repetitions = true;
     args.push_back(argv[i]);
   }

@@ -28,6 +28,7 @@
 // of a fixed number of iterations and reports mean, median, stddev, cv, min
 // and max over them of the wall-clock time and the process CPU time (all
 // threads); --benchmark_out keeps each repetition too.
+#include "nec/owo/training.h"
 #include "nec/tat/fk.h"
 #include "nec/tat/inference.h"
 #include "nec/tat/loss.h"
@@ -44,7 +45,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <random>
@@ -61,19 +61,11 @@ constexpr uint64_t kSeed = 0;           // torch::manual_seed before inputs and 
 constexpr int64_t kClipFrames = 600;    // encode / decode clip length
 constexpr int kDefaultRepetitions = 5;
 
-std::string& configs_dir() {
-  static std::string dir = std::string(NEC_SOURCE_DIR) + "/configs";
-  return dir;
-}
-
 // tat_cpu.json, joint embeddings as wide as owo_cpu.json's encoder.
 const nec::tat::TatTrainConfig& train_config() {
   static const nec::tat::TatTrainConfig config = [] {
-    nec::tat::TatTrainConfig c = nec::tat::read_tat_train_config(configs_dir() + "/tat_cpu.json");
-    const std::string owo_path = configs_dir() + "/owo_cpu.json";
-    std::ifstream owo(owo_path);
-    if (!owo) throw std::runtime_error("cannot read " + owo_path);
-    c.model.joint_embedding_dim = nlohmann::json::parse(owo).at("encoder").at("dim").get<int64_t>();
+    nec::tat::TatTrainConfig c = nec::tat::read_tat_train_config(nec::bench::configs_dir() + "/tat_cpu.json");
+    c.model.joint_embedding_dim = nec::owo::read_owo_training_config(nec::bench::configs_dir() + "/owo_cpu.json").encoder.dim;
     c.validate();
     return c;
   }();
@@ -232,9 +224,7 @@ int main(int argc, char** argv) {
   int count = static_cast<int>(args.size());
   benchmark::Initialize(&count, args.data());  // removes the --benchmark_* flags it knows
   for (int i = 1; i < count; ++i) {
-    if (std::strncmp(args[i], "--configs=", 10) == 0) {
-      configs_dir() = args[i] + 10;
-    } else if (!nec::bench::take_profile_ops_flag(args[i])) {
+    if (!nec::bench::take_step_flag(args[i])) {
       std::fprintf(stderr, "bench_tat: unknown argument '%s' (--configs=DIR, --profile_ops=DIR or --benchmark_* flags)\n",
                    args[i]);
       return 2;

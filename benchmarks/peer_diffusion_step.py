@@ -7,7 +7,7 @@ diffusion/src/denoiser.cpp, noise_schedule.cpp, objective.cpp and training.cpp
 attention of layers/src/transformer.cpp, both in peer_layers.py): the same
 modules created in the same order (so the same torch.manual_seed gives the
 same initial weights), the same forward, the same loss, and the step of
-diffusion/synthetic.h (zero_grad, backward, clip_grad_norm_, AdamW at the
+diffusion/synthetic.h (zero_grad, backward, the gradient clip, AdamW at the
 scheduled learning rate, over the parameters the stage trains) on its
 synthetic batch, drawn with the same torch random calls. Its first two losses
 therefore equal bench_diffusion's counters loss_step0 / loss_step1 up to float
@@ -36,9 +36,10 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from peer_layers import Linear, TextEncoder, multi_head_attention, padding_bias, USE_LITE_WIDTH
-from peer_step import add_arguments, keep_large_allocations_in_heap, print_json, run_settings
+from peer_step import (add_arguments, keep_large_allocations_in_heap, learning_rate_at, optimizer_step, print_json,
+                       run_settings)
 # The tokenizer's peer holds model space, Θ's random draws and the schedule already.
-from peer_tat_step import features_to_model_space, learning_rate_at, random_features, MODEL_CHANNELS
+from peer_tat_step import features_to_model_space, random_features, MODEL_CHANNELS
 
 SEED = 0                  # torch.manual_seed before inputs and model, as bench_diffusion
 NORM_EPSILON = 1e-6       # denoiser.cpp kNormEpsilon
@@ -380,11 +381,7 @@ class Trainee:
         self.optimizer.zero_grad()
         loss = denoising_objective(self.model, self.alpha_bar, self.x, self.stage, self.c["velocity_weight"])
         loss.backward()
-        if self.c["grad_clip"] > 0:
-            torch.nn.utils.clip_grad_norm_(self.trained, self.c["grad_clip"])
-        for group in self.optimizer.param_groups:
-            group["lr"] = lr
-        self.optimizer.step()
+        optimizer_step(self.optimizer, self.trained, self.c["grad_clip"], lr)
         return loss.item()
 
 

@@ -6,7 +6,7 @@ motion_encoder.cpp and training.cpp, with layers/src/transformer.cpp and the use
 (text/encoder/src/text_encoder.cpp, 0 layers), both in peer_layers.py: the same modules created in the same
 order (so the same torch.manual_seed gives the same initial weights), the same dropout calls in the same order
 (so the same masks), the same contrastive loss, and the step of EvaluatorTrainer::step after its batch is made
-(zero_grad, backward, clip_grad_norm_, AdamW at the scheduled learning rate) on the synthetic batch of
+(zero_grad, backward, the gradient clip, AdamW at the scheduled learning rate) on the synthetic batch of
 evaluator/src/synthetic.cpp, drawn with the same torch random calls. The tokenizer's model space comes from
 peer_tat_step.py, as the C++ motion encoder reads tat/model_space.h. Its first two losses therefore equal
 bench_evaluator's counters loss_step0 / loss_step1 up to float rounding, which scripts/bench.sh checks.
@@ -32,8 +32,9 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from peer_layers import Linear, TextEncoder, TransformerStack, masked_mean, padding_bias, USE_LITE_WIDTH
-from peer_step import add_arguments, keep_large_allocations_in_heap, print_json, run_settings
-from peer_tat_step import features_to_model_space, learning_rate_at, random_features, MODEL_CHANNELS
+from peer_step import (add_arguments, keep_large_allocations_in_heap, learning_rate_at, optimizer_step, print_json,
+                       run_settings)
+from peer_tat_step import features_to_model_space, random_features, MODEL_CHANNELS
 
 SEED = 0               # torch.manual_seed before inputs and model, as bench_evaluator
 PIECES = 12            # synthetic.h kSyntheticPieces
@@ -195,15 +196,11 @@ class Trainee:
         """synthetic.cpp synthetic_evaluator_train_step: EvaluatorTrainer::step after its batch is made."""
         self.steps += 1
         lr = learning_rate_at(self.c, self.steps)
-        for group in self.optimizer.param_groups:
-            group["lr"] = lr
         self.model.train()
         self.optimizer.zero_grad()
         loss = contrastive_batch_loss(self.model, self.x)
         loss.backward()
-        if self.c["grad_clip"] > 0:
-            torch.nn.utils.clip_grad_norm_(self.model.parameters(), self.c["grad_clip"])
-        self.optimizer.step()
+        optimizer_step(self.optimizer, list(self.model.parameters()), self.c["grad_clip"], lr)
         return loss.item()
 
 

@@ -39,8 +39,8 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from peer_layers import Linear, TextEncoder, padding_bias, MASKED_SCORE, USE_LITE_WIDTH
-from peer_step import add_arguments, keep_large_allocations_in_heap, print_json, run_settings
-from peer_tat_step import learning_rate_at
+from peer_step import (add_arguments, keep_large_allocations_in_heap, learning_rate_at, optimizer_step, print_json,
+                       run_settings)
 
 SEED = 0                   # torch.manual_seed before the batch and the model, as bench_gpt
 PREFIX_TOKENS = 2          # model.cpp kPrefixTokens: sentence, skeleton
@@ -278,21 +278,6 @@ class Trainee:
         self.parameters = sum(p.numel() for p in self.model.parameters())
         self.steps = 0
 
-    def clip_and_step(self, lr):
-        """train/optimizer.cpp optimizer_step on one process: the global norm, the clip, the rate, AdamW."""
-        gradients = [p.grad for p in self.model.parameters() if p.grad is not None]
-        norm = torch.cat([g.detach().norm().reshape(1) for g in gradients]).norm().item()
-        if not math.isfinite(norm):
-            self.optimizer.zero_grad()
-            return
-        if 0 < self.c["grad_clip"] < norm:
-            with torch.no_grad():
-                for g in gradients:
-                    g.mul_(self.c["grad_clip"] / (norm + 1e-6))
-        for group in self.optimizer.param_groups:
-            group["lr"] = lr
-        self.optimizer.step()
-
     def step(self):
         """synthetic_gpt_train_step: GptTrainer::step after its batch is made and its captions read."""
         self.steps += 1
@@ -310,7 +295,7 @@ class Trainee:
         loss, _ = gpt_loss(first, rest, x["targets"], inputs.size(0))
         loss.backward()
         value = loss.item()
-        self.clip_and_step(lr)
+        optimizer_step(self.optimizer, list(self.model.parameters()), self.c["grad_clip"], lr)
         return value
 
 

@@ -13,6 +13,7 @@ benchmarks do; then per thread count, `repetitions` times `iterations` timed ste
 """
 import ctypes
 import json
+import math
 import os
 import re
 import statistics
@@ -25,6 +26,32 @@ WARMUP_STEPS = 2  # untimed steps before a setting's first measurement, as the C
 LARGE_BLOCK = 1 << 30  # train/src/heap.cpp kLargeBlock
 M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3  # glibc's mallopt parameters
 OP_SCOPES = (0, 1)  # at::RecordScope FUNCTION, BACKWARD_FUNCTION
+
+
+def learning_rate_at(c, step):
+    """train/optimizer.cpp LearningRateSchedule::at (step from 1): linear warmup, then cosine to the final rate."""
+    peak, warmup = c["learning_rate"], c["warmup_steps"]
+    if warmup > 0 and step <= warmup:
+        return peak * max(step, 1) / warmup
+    floor = peak * c["final_lr_fraction"]
+    progress = min(1.0, max(0.0, (step - warmup) / max(1, c["steps"] - warmup)))
+    return floor + (peak - floor) * 0.5 * (1.0 + math.cos(math.pi * progress))
+
+
+def optimizer_step(optimizer, parameters, grad_clip, lr):
+    """train/optimizer.cpp optimizer_step on one process: the global norm, the clip, the rate, AdamW."""
+    gradients = [p.grad for p in parameters if p.grad is not None]
+    norm = torch.cat([g.detach().norm().reshape(1) for g in gradients]).norm().item()
+    if not math.isfinite(norm):
+        optimizer.zero_grad()
+        return
+    if 0 < grad_clip < norm:
+        with torch.no_grad():
+            for g in gradients:
+                g.mul_(grad_clip / (norm + 1e-6))
+    for group in optimizer.param_groups:
+        group["lr"] = lr
+    optimizer.step()
 
 
 def keep_large_allocations_in_heap():

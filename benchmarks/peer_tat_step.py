@@ -5,7 +5,7 @@ A line-by-line re-implementation of the NEC tokenizer (nec-rvq / nec-vq) of
 tat/src/tokenizer.cpp, quantizer.cpp, fk.cpp and loss.cpp: the same modules
 created in the same order (so the same torch.manual_seed gives the same
 initial weights), the same forward, the same losses, and the step of
-TatTrainer::step (zero_grad, backward, clip_grad_norm_, AdamW at the scheduled
+TatTrainer::step (zero_grad, backward, the gradient clip, AdamW at the scheduled
 learning rate) on the synthetic batch of benchmarks/bench_tat.cpp, drawn with
 the same torch random calls. Linear layers compute as LibTorch's do
 (peer_layers.Linear). Its first two losses therefore equal bench_tat's
@@ -33,7 +33,8 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from peer_layers import Linear
-from peer_step import add_arguments, keep_large_allocations_in_heap, print_json, run_settings
+from peer_step import (add_arguments, keep_large_allocations_in_heap, learning_rate_at, optimizer_step, print_json,
+                       run_settings)
 
 SEED = 0                 # torch.manual_seed before inputs and model, as bench_tat
 RESIDUAL_DILATION = 3    # tokenizer.cpp kResidualDilation
@@ -84,16 +85,6 @@ def read_config(configs):
         "batch_size": raw.get("batch_size", 32),
         "window_frames": raw.get("data", {}).get("window_frames", 64),
     }
-
-
-def learning_rate_at(c, step):
-    """train/optimizer.cpp LearningRateSchedule::at (step from 1): linear warmup, then cosine to the final rate."""
-    peak, warmup = c["learning_rate"], c["warmup_steps"]
-    if warmup > 0 and step <= warmup:
-        return peak * max(step, 1) / warmup
-    floor = peak * c["final_lr_fraction"]
-    progress = min(1.0, max(0.0, (step - warmup) / max(1, c["steps"] - warmup)))
-    return floor + (peak - floor) * 0.5 * (1.0 + math.cos(math.pi * progress))
 
 
 # ---- Tokenizer (tokenizer.cpp) ----
@@ -601,8 +592,6 @@ class Trainee:
         """TatTrainer::step without the batch conversion and the OwO embeddings."""
         self.steps += 1
         lr = learning_rate_at(self.c, self.steps)
-        for group in self.optimizer.param_groups:
-            group["lr"] = lr
         self.model.train()
         x = self.x
         reconstruction, _, commitment, perplexity = self.model(x["features"], x["joint_mask"], x["frame_mask"],
@@ -610,9 +599,7 @@ class Trainee:
         total, _ = reconstruction_loss(reconstruction, x, commitment, self.c["loss"])
         self.optimizer.zero_grad()
         total.backward()
-        if self.c["grad_clip"] > 0:
-            torch.nn.utils.clip_grad_norm_(self.model.parameters(), self.c["grad_clip"])
-        self.optimizer.step()
+        optimizer_step(self.optimizer, list(self.model.parameters()), self.c["grad_clip"], lr)
         self.model.quantizer.update_codebooks()
         perplexity.to("cpu", torch.float64).tolist()
         return total.item()

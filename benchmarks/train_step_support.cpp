@@ -14,6 +14,7 @@
 #include <mutex>
 #include <set>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace nec::bench {
@@ -61,6 +62,11 @@ void on_end(const at::RecordFunction& fn, at::ObserverContext* context) {
 
 std::string& profile_dir() {
   static std::string dir;
+  return dir;
+}
+
+std::string& configs_dir_setting() {
+  static std::string dir = std::string(NEC_SOURCE_DIR) + "/configs";
   return dir;
 }
 
@@ -137,11 +143,17 @@ void write_op_profile(const OpProfile& profile, const std::string& path) {
   if (!(file << out.dump(1) << '\n')) throw std::runtime_error("cannot write " + path);
 }
 
-bool take_profile_ops_flag(const char* arg) {
-  constexpr const char* kFlag = "--profile_ops=";
-  if (std::strncmp(arg, kFlag, std::strlen(kFlag)) != 0) return false;
-  profile_dir() = arg + std::strlen(kFlag);
-  return true;
+const std::string& configs_dir() { return configs_dir_setting(); }
+
+bool take_step_flag(const char* arg) {
+  for (const auto& [flag, value] : {std::pair<const char*, std::string*>{"--profile_ops=", &profile_dir()},
+                                    std::pair<const char*, std::string*>{"--configs=", &configs_dir_setting()}}) {
+    if (std::strncmp(arg, flag, std::strlen(flag)) == 0) {
+      *value = arg + std::strlen(flag);
+      return true;
+    }
+  }
+  return false;
 }
 
 void profile_ops_if_asked(const std::string& label, const std::function<void()>& region, int64_t repeats) {

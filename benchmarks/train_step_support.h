@@ -75,9 +75,12 @@ OpProfile profile_ops(const std::function<void()>& region, int64_t repeats);
 // JSON: {"repeats", "wall_ms", "top_level_ms", "ops": {name: {"calls", "self_ms", "total_ms"}}}.
 void write_op_profile(const OpProfile& profile, const std::string& path);
 
-// The --profile_ops=DIR flag of the benchmark programs: true (and DIR kept)
-// when `arg` is that flag.
-bool take_profile_ops_flag(const char* arg);
+// The configs the step benchmarks build their models from: the repository's
+// configs/ unless --configs=DIR.
+const std::string& configs_dir();
+// The flags of the step benchmark programs beside Google Benchmark's:
+// --configs=DIR and --profile_ops=DIR. True (and DIR kept) when `arg` is one.
+bool take_step_flag(const char* arg);
 // With --profile_ops=DIR, the first time a label comes: `region` `repeats`
 // more times under the profiler, written to DIR/<label>.json ('/' and ':' in
 // the label become '_'). Else nothing.

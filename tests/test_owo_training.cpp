@@ -2,7 +2,6 @@
 // augmentation, the training config file, the learning-rate schedule, and a
 // trainer whose resumed steps equal the uninterrupted ones.
 #include "nec/motion/error.h"
-#include "nec/motion/files.h"
 #include "nec/corpus/preprocess.h"
 #include "nec/owo/graph.h"
 #include "nec/owo/skeleton_set.h"
@@ -231,7 +230,7 @@ TEST(OwoTrainingConfig, FieldsDefaultsErrorsAndRoundTrip) {
   const std::filesystem::path configs = std::filesystem::path(__FILE__).parent_path().parent_path() / "configs";
   for (const char* name : {"owo_cpu.json", "owo_gpu.json"}) {
     const std::string path = (configs / name).string();
-    EXPECT_NO_THROW(owo::parse_owo_training_config(read_file(path), path)) << path;
+    EXPECT_NO_THROW(owo::read_owo_training_config(path)) << path;
   }
   EXPECT_EQ(train::fields_that_may_change<owo::OwoTrainingConfig>(),
             (std::set<std::string>{"steps", "log_every", "validate_every", "checkpoint_every"}));

@@ -6,6 +6,7 @@
 #include "nec/corpus/preprocess.h"
 #include "nec/owo/pretrain.h"
 #include "nec/tat/checkpoint.h"
+#include "nec/tat/inference.h"
 #include "nec/tat/training.h"
 #include "nec/train/config_fields.h"
 #include "nec/zoo/creature.h"
@@ -140,6 +141,51 @@ TEST(TatTrainer, ALaterEndGoesOnFromTheRateItHadAndOtherConfigsAreRefused) {
   }
   EXPECT_THROW(tat::TatTrainer(config, cache, "walks", testing::tiny_frozen_owo(), nullptr, torch::kCPU).resume(dir / "none"),
                InputError);
+}
+
+// What the trainers embed each step: the corpus's rigs, kept before the first
+// step, come back as embedding the batch afresh gives them; augmented rigs and
+// rigs of test clips are embedded as they come.
+TEST(RememberedSkeletonEmbeddings, ReadLikeFreshOnesAndKeepOnlyTheCorpusRigs) {
+  torch::set_num_threads(1);
+  DatasetCache cache = walk_cache();
+  ASSERT_EQ(cache.skeletons.size(), 8u);
+  for (CacheClip& clip : cache.clips) {
+    if (clip.skeleton >= 6) clip.split = Split::Test;
+  }
+  owo::OwoPretrainer owo = testing::tiny_frozen_owo();
+  tat::RememberedSkeletonEmbeddings remembered(owo->encoder, nullptr, cache, size_t{1} << 20);
+  EXPECT_EQ(remembered.kept_rigs(), 6u);
+  const auto batch_of = [&](const std::vector<int>& skeletons, const std::vector<uint8_t>& augmented) {
+    Batch batch;
+    for (const int s : skeletons) {
+      Skeleton skeleton = cache.skeletons[static_cast<size_t>(s)].skeleton;
+      if (augmented[batch.skeletons.size()]) skeleton.offsets[1] *= 1.5;  // as a length augmentation would
+      batch.skeletons.push_back(skeleton);
+      batch.canonical_names.push_back(cache.skeletons[static_cast<size_t>(s)].canonical_names);
+    }
+    batch.augmented = augmented;
+    return batch;
+  };
+  const std::vector<std::pair<std::vector<int>, std::vector<uint8_t>>> batches = {
+      {{0, 1, 1}, {0, 0, 1}}, {{1, 7, 2, 0}, {1, 0, 0, 0}}, {{2, 0, 5}, {0, 0, 0}}, {{2, 6}, {1, 0}}};
+  for (const auto& [rigs, augmented] : batches) {
+    const Batch batch = batch_of(rigs, augmented);
+    const at::Tensor read = remembered.embed(batch);
+    const at::Tensor fresh = tat::embed_skeletons(*owo->encoder, batch.skeletons, batch.canonical_names, nullptr);
+    ASSERT_EQ(read.sizes(), fresh.sizes());
+    EXPECT_FALSE(read.is_inference());
+    EXPECT_LT((read - fresh).abs().max().item<double>(), 1e-5 * fresh.abs().max().item<double>());
+    // An augmented rig is read as itself, not as the kept rig it came from.
+    for (size_t i = 0; i < rigs.size(); ++i) {
+      if (!augmented[i]) continue;
+      const CachedSkeleton& rig = cache.skeletons[static_cast<size_t>(rigs[i])];
+      const at::Tensor unaugmented = tat::embed_skeletons(*owo->encoder, {rig.skeleton}, {rig.canonical_names}, nullptr)[0];
+      EXPECT_GT((read[static_cast<int64_t>(i)].narrow(0, 0, rig.skeleton.joint_count()) - unaugmented).abs().max().item<double>(),
+                1e-4);
+    }
+  }
+  EXPECT_EQ(tat::RememberedSkeletonEmbeddings(owo->encoder, nullptr, cache, 64).kept_rigs(), 0u);
 }
 
 TEST(TatTrainConfig, NotesAreAllowedEverywhereAndUnknownFieldsAreNamed) {

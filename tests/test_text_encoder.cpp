@@ -234,6 +234,62 @@ TEST_F(UseLiteTextEncoderTest, BatchesHoldTheSentenceEncodersOutputsForTheNormal
   EXPECT_EQ(reader_.count_pieces("a spider crawls"), batch.mask[1].sum().item<int64_t>());
 }
 
+// Largest difference of two tensors relative to the largest magnitude of `expected`.
+double relative_difference(const at::Tensor& read, const at::Tensor& expected) {
+  return (read - expected).abs().max().item<double>() / expected.abs().max().item<double>();
+}
+
+// A trainer's reader keeps the encodings of its corpus's captions: a batch of
+// those, repeats and new captions reads what a reader keeping nothing reads,
+// and copies of the reader share what was kept.
+TEST_F(UseLiteTextEncoderTest, RememberedCorpusEncodingsReadLikeFreshOnes) {
+  DatasetCache cache;
+  const std::vector<std::pair<Split, std::vector<std::string>>> clips = {
+      {Split::Train, {"a dog walks", "A dog walks!"}},
+      {Split::Val, {"a spider crawls quickly in a circle"}},
+      {Split::Test, {"a bird flaps its wings"}},
+  };
+  for (const auto& [split, captions] : clips) {
+    CacheClip clip;
+    clip.id = "clip" + std::to_string(cache.clips.size());
+    clip.split = split;
+    clip.captions = captions;
+    cache.clips.push_back(clip);
+  }
+  text::CaptionReader remembering = reader_;
+  remembering.remember_corpus_encodings(cache, size_t{1} << 24);
+  const text::CaptionReader copy = remembering;
+  EXPECT_EQ(copy.remembered_captions(), 2u);  // "a dog walks" once; not the test clip's caption
+  EXPECT_EQ(reader_.remembered_captions(), 0u);
+  const std::vector<std::vector<std::string>> batches = {
+      {"a dog walks", "a spider crawls quickly in a circle"},
+      {"a spider crawls quickly in a circle", "a bird flaps its wings", "A dog walks!", "a bird flaps its wings"},
+      {"a bird flaps its wings"},
+  };
+  for (const std::vector<std::string>& captions : batches) {
+    const TextBatch fresh = reader_.read(captions, nullptr, "query");
+    for (const text::CaptionReader* reader : {&copy, static_cast<const text::CaptionReader*>(&remembering)}) {
+      const TextBatch read = reader->read(captions, nullptr, "query");
+      ASSERT_EQ(read.encoder_features.sizes(), fresh.encoder_features.sizes()) << captions.size();
+      EXPECT_TRUE(torch::equal(read.mask, fresh.mask));
+      // Float rounding of products of other shapes (measured: 2e-6 of the largest feature).
+      EXPECT_LT(relative_difference(read.encoder_features, fresh.encoder_features), 1e-5);
+      EXPECT_LT(relative_difference(read.encoder_sentence, fresh.encoder_sentence), 1e-5);
+    }
+  }
+  // Reading a kept caption again gives the same numbers bit for bit.
+  EXPECT_TRUE(torch::equal(copy.read(batches[0], nullptr, "query").encoder_features,
+                           remembering.read(batches[0], nullptr, "query").encoder_features));
+  // A budget too small to keep anything keeps nothing and reads the same; errors still name the caption.
+  text::CaptionReader keeping_nothing = reader_;
+  keeping_nothing.remember_corpus_encodings(cache, 16);
+  EXPECT_EQ(keeping_nothing.remembered_captions(), 0u);
+  EXPECT_LT(relative_difference(keeping_nothing.read(batches[1], nullptr, "query").encoder_sentence,
+                                reader_.read(batches[1], nullptr, "query").encoder_sentence),
+            1e-5);
+  EXPECT_THROW(remembering.read({"a dog walks", ""}, nullptr, "query"), InputError);
+}
+
 TEST_F(UseLiteTextEncoderTest, OutputsHaveTheirShapesAndDoNotDependOnPadding) {
   torch::manual_seed(3);
   TextEncoder encoder(config_);

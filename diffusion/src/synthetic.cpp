@@ -1,16 +1,14 @@
 // Synthetic diffusion inputs and the bare training step shared with the Python peer.
 #include "nec/diffusion/synthetic.h"
 
+#include "nec/owo/training.h"
 #include "nec/tat/model_space.h"
 #include "nec/tat/synthetic.h"
 #include "nec/train/optimizer.h"
 
-#include <nlohmann/json.hpp>
 #include <torch/torch.h>
 
 #include <cmath>
-#include <fstream>
-#include <stdexcept>
 
 namespace nec::diffusion {
 namespace {
@@ -29,10 +27,7 @@ DiffusionTrainConfig synthetic_stage_config(const std::string& configs_dir, Diff
     config = read_diffusion_train_config(configs_dir + "/diffusion_motion_cpu.json");
     config.model = pose.model;
   }
-  const std::string owo_path = configs_dir + "/owo_cpu.json";
-  std::ifstream owo(owo_path);
-  if (!owo) throw std::runtime_error("cannot read " + owo_path);
-  config.model.skeleton_dim = nlohmann::json::parse(owo).at("encoder").at("dim").get<int64_t>();
+  config.model.skeleton_dim = owo::read_owo_training_config(configs_dir + "/owo_cpu.json").encoder.dim;
   config.validate();
   return config;
 }

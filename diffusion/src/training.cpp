@@ -159,6 +159,9 @@ DiffusionTrainer::DiffusionTrainer(const DiffusionTrainConfig& config, Diffusion
   owo_->to(device_);
   owo_->eval();
   for (auto& parameter : owo_->parameters()) parameter.set_requires_grad(false);
+  skeleton_embeddings_ =
+      std::make_unique<tat::RememberedSkeletonEmbeddings>(owo_->encoder, vectors_, cache_, train::kRememberedEncodingBytes);
+  captions_.remember_corpus_encodings(cache_, train::kRememberedEncodingBytes);
   optimizer_ = train::make_adamw(trained_parameters(), config_.optimizer);
 }
 
@@ -176,8 +179,7 @@ int64_t DiffusionTrainer::trained_parameter_count() const {
 
 at::Tensor DiffusionTrainer::loss_of(const Batch& batch, bool validation, uint64_t draw_seed) {
   const tat::BatchTensors x = tat::to_tensors(batch).to(device_);
-  const at::Tensor joints =
-      tat::embed_skeletons(*owo_->encoder, batch.skeletons, batch.canonical_names, vectors_).clone().to(device_);
+  const at::Tensor joints = skeleton_embeddings_->embed(batch).to(device_);
   const SkeletonInputs skeletons = make_skeleton_inputs(x.parents, x.offsets, x.joint_mask, joints);
   const int64_t b = batch.size;
   // Each item draws its timestep, noise, frames and caption dropout from a stream of its own, seeded by
@@ -211,9 +213,9 @@ at::Tensor DiffusionTrainer::loss_of(const Batch& batch, bool validation, uint64
   const int64_t frames = drawn.motion.size(1), width = drawn.motion.size(2), channels = drawn.motion.size(3);
   std::vector<at::Tensor> noises;
   for (int64_t i = 0; i < b; ++i) {
-    const int64_t joints = batch.joint_counts[static_cast<size_t>(i)];
-    noises.push_back(torch::constant_pad_nd(torch::randn({frames, joints, channels}, streams[static_cast<size_t>(i)]),
-                                            {0, 0, 0, width - joints}));
+    const int64_t item_joints = batch.joint_counts[static_cast<size_t>(i)];
+    noises.push_back(torch::constant_pad_nd(torch::randn({frames, item_joints, channels}, streams[static_cast<size_t>(i)]),
+                                            {0, 0, 0, width - item_joints}));
   }
   drawn.noise = torch::stack(noises).to(device_);
 

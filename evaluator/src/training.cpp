@@ -134,6 +134,9 @@ EvaluatorTrainer::EvaluatorTrainer(const EvaluatorTrainConfig& config, const Dat
 
   const std::vector<int> train_clips = captioned_clips(cache, Split::Train);
   captions_.check_corpus(cache, data_name_);
+  captions_.remember_corpus_encodings(cache, train::kRememberedEncodingBytes);
+  skeleton_embeddings_ =
+      std::make_unique<tat::RememberedSkeletonEmbeddings>(owo_->encoder, vectors_, cache, train::kRememberedEncodingBytes);
   if (static_cast<int64_t>(train_clips.size()) < config_.batch_size) {
     throw InputError(data_name_, 0,
                      "the train split has " + std::to_string(train_clips.size()) +
@@ -182,7 +185,7 @@ train::LossTerms EvaluatorTrainer::step(int64_t step) {
   double loss_value = 0;
   if (batch.size > 0) {
     const tat::BatchTensors x = tat::to_tensors(batch).to(device_);
-    const at::Tensor joints = tat::embed_skeletons(*owo_->encoder, batch.skeletons, batch.canonical_names, vectors_).clone();
+    const at::Tensor joints = skeleton_embeddings_->embed(batch);
     const text::TextBatch captions =
         captions_.read(rewritten_captions(batch.captions, step), vectors_, data_name_ + " captions");
     // Items whose normalized captions are equal match each other: compare caption ids, not strings, B^2 times.

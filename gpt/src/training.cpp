@@ -128,6 +128,7 @@ GptTrainer::GptTrainer(const GptTrainConfig& config, const DatasetCache& cache, 
   }
   if (train_rows_.empty()) throw InputError(data_name_, 0, "the train split has no clip with a caption");
   captions_.check_corpus(cache_, data_name_);
+  captions_.remember_corpus_encodings(cache_, train::kRememberedEncodingBytes);
 
   torch::manual_seed(config_.seed);
   model_ = TokenGpt(config_.model);

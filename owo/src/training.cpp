@@ -122,6 +122,10 @@ OwoTrainingConfig parse_owo_training_config(const std::string& text, const std::
   return config_from_json(root, file);
 }
 
+OwoTrainingConfig read_owo_training_config(const std::string& path) {
+  return parse_owo_training_config(read_file(path, size_t{1} << 24), path);
+}
+
 std::string owo_training_config_json(const OwoTrainingConfig& config) { return config_to_json(config).dump(2) + "\n"; }
 
 std::vector<std::string> differing_fields(const OwoTrainingConfig& a, const OwoTrainingConfig& b) {

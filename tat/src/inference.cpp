@@ -107,6 +107,89 @@ owo::OwoOutput encode_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<
   return encoder.forward(owo::collate(graphs, config.name_dim).to(device));
 }
 
+namespace {
+
+// What the OwO encoder reads of a skeleton, as bytes: equal keys, equal embeddings.
+std::string skeleton_key(const Skeleton& skeleton, const std::vector<std::string>& canonical_names) {
+  std::string key;
+  const auto append = [&key](const void* data, size_t bytes) { key.append(static_cast<const char*>(data), bytes); };
+  for (const std::string& name : canonical_names) key.append(name).push_back('\0');
+  append(skeleton.parents.data(), skeleton.parents.size() * sizeof(int));
+  for (const Vec3& offset : skeleton.offsets) append(offset.data(), 3 * sizeof(double));
+  for (const EndSite& end : skeleton.end_sites) {
+    append(&end.parent, sizeof(int));
+    append(end.offset.data(), 3 * sizeof(double));
+  }
+  return key;
+}
+
+}  // namespace
+
+RememberedSkeletonEmbeddings::RememberedSkeletonEmbeddings(owo::OwoEncoder encoder, const text::WordVectors* vectors,
+                                                           const DatasetCache& cache, size_t max_bytes)
+    : encoder_(std::move(encoder)), vectors_(vectors) {
+  constexpr size_t kChunk = 64;
+  std::vector<bool> used(cache.skeletons.size(), false);
+  for (const CacheClip& clip : cache.clips) {
+    if (clip.split != Split::Test) used.at(static_cast<size_t>(clip.skeleton)) = true;
+  }
+  std::vector<Skeleton> chunk;
+  std::vector<std::vector<std::string>> names;
+  size_t bytes = 0;
+  const auto embed_chunk = [&] {
+    const at::Tensor embedded = embed_skeletons(*encoder_, chunk, names, vectors_);
+    for (size_t i = 0; i < chunk.size(); ++i) {
+      at::Tensor row = embedded[static_cast<int64_t>(i)].narrow(0, 0, chunk[i].joint_count()).clone();
+      bytes += static_cast<size_t>(row.numel()) * sizeof(float);
+      if (bytes > max_bytes) return false;
+      kept_.emplace(skeleton_key(chunk[i], names[i]), std::move(row));
+    }
+    chunk.clear();
+    names.clear();
+    return true;
+  };
+  for (size_t s = 0; s < cache.skeletons.size(); ++s) {
+    if (!used[s]) continue;
+    chunk.push_back(cache.skeletons[s].skeleton);
+    names.push_back(cache.skeletons[s].canonical_names);
+    if (chunk.size() == kChunk && !embed_chunk()) return;
+  }
+  if (!chunk.empty()) embed_chunk();
+}
+
+RememberedSkeletonEmbeddings::~RememberedSkeletonEmbeddings() = default;
+
+at::Tensor RememberedSkeletonEmbeddings::embed(const Batch& batch) {
+  const size_t items = batch.skeletons.size();
+  std::vector<at::Tensor> rows(items);
+  std::vector<size_t> missing;  // items embedded now
+  std::vector<Skeleton> skeletons;
+  std::vector<std::vector<std::string>> names;
+  for (size_t i = 0; i < items; ++i) {
+    const bool augmented = i < batch.augmented.size() && batch.augmented[i] != 0;
+    const auto kept = augmented ? kept_.end() : kept_.find(skeleton_key(batch.skeletons[i], batch.canonical_names[i]));
+    if (kept != kept_.end()) {
+      rows[i] = kept->second;
+      continue;
+    }
+    missing.push_back(i);
+    skeletons.push_back(batch.skeletons[i]);
+    names.push_back(batch.canonical_names[i]);
+  }
+  if (missing.size() == items) return embed_skeletons(*encoder_, skeletons, names, vectors_).clone();
+  if (!missing.empty()) {
+    const at::Tensor fresh = embed_skeletons(*encoder_, skeletons, names, vectors_);
+    for (size_t m = 0; m < missing.size(); ++m) {
+      rows[missing[m]] = fresh[static_cast<int64_t>(m)].narrow(0, 0, skeletons[m].joint_count()).clone();
+    }
+  }
+  int64_t most_joints = 0;
+  for (const at::Tensor& row : rows) most_joints = std::max(most_joints, row.size(0));
+  at::Tensor out = torch::zeros({static_cast<int64_t>(items), most_joints, rows.front().size(1)}, rows.front().options());
+  for (size_t i = 0; i < items; ++i) out[static_cast<int64_t>(i)].narrow(0, 0, rows[i].size(0)).copy_(rows[i]);
+  return out;
+}
+
 at::Tensor encode_clip(TokenizerImpl& tokenizer, const Features& features, const at::Tensor& embeddings,
                        const WindowOptions& windows) {
   require_eval(tokenizer);

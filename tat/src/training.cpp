@@ -110,6 +110,10 @@ TatTrainer::TatTrainer(const TatTrainConfig& config, const DatasetCache& cache, 
   owo_->to(device_);
   owo_->eval();
   for (auto& parameter : owo_->parameters()) parameter.set_requires_grad(false);
+  if (config_.model.kind != TokenizerKind::ZeroPadRvq) {
+    skeleton_embeddings_ =
+        std::make_unique<RememberedSkeletonEmbeddings>(owo_->encoder, vectors_, cache_, train::kRememberedEncodingBytes);
+  }
   optimizer_ = train::make_adamw(tokenizer_->parameters(), config_.optimizer);
 
   BatchOptions batches = train::training_batches(config_.data, config_.batch_size, config_.seed, ranks_);
@@ -150,7 +154,7 @@ TatTrainer::Inputs TatTrainer::inputs(const Batch& batch) {
   Inputs in;
   in.batch = to_tensors(batch).to(device_);
   if (config_.model.kind != TokenizerKind::ZeroPadRvq) {
-    in.embeddings = embed_skeletons(*owo_->encoder, batch.skeletons, batch.canonical_names, vectors_).clone();
+    in.embeddings = skeleton_embeddings_->embed(batch);
   }
   return in;
 }

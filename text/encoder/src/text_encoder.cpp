@@ -11,9 +11,11 @@
 #include <nlohmann/json.hpp>
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <mutex>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace nec::text {
 namespace {
@@ -138,8 +140,11 @@ TextBatch make_text_batch(const std::vector<std::string>& captions, const PieceM
   return batch;
 }
 
-TextBatch make_sentence_batch(const std::vector<std::string>& captions, const SentenceEncoderImpl& encoder,
-                              const TextEncoderConfig& config, const std::string& where) {
+namespace {
+
+// Each caption's pieces as the sentence encoder reads them; InputError as make_text_batch.
+std::vector<std::vector<int>> sentence_pieces(const std::vector<std::string>& captions, const SentenceEncoderImpl& encoder,
+                                              const TextEncoderConfig& config, const std::string& where) {
   if (encoder.dim() != kUseLiteWidth) {
     throw std::invalid_argument("make_sentence_batch: the sentence encoder is " + std::to_string(encoder.dim()) +
                                 " wide, the text encoder reads " + std::to_string(kUseLiteWidth));
@@ -151,13 +156,116 @@ TextBatch make_sentence_batch(const std::vector<std::string>& captions, const Se
     pieces.push_back(encoder.pieces().encode(checked_caption(captions[i], name)));
     check_piece_count(static_cast<int64_t>(pieces.back().size()), config, name, captions[i]);
   }
-  const SentenceEncoding encoded = encoder.encode_pieces(std::move(pieces));
+  return pieces;
+}
+
+TextBatch to_text_batch(const SentenceEncoding& encoded) {
   TextBatch batch;
   batch.encoder_features = encoded.features;
   batch.encoder_sentence = encoded.sentence;
   batch.mask = encoded.mask;
   return batch;
 }
+
+}  // namespace
+
+TextBatch make_sentence_batch(const std::vector<std::string>& captions, const SentenceEncoderImpl& encoder,
+                              const TextEncoderConfig& config, const std::string& where) {
+  return to_text_batch(encoder.encode_pieces(sentence_pieces(captions, encoder, config, where)));
+}
+
+// The sentence encoder's outputs for a fixed set of captions, keyed by their pieces.
+class RememberedEncodings {
+ public:
+  // Encodes `pieces` (rows of captions, repeats allowed) 64 rows at a time and keeps each row's
+  // encoding while max_bytes allows.
+  RememberedEncodings(const std::vector<std::vector<int>>& pieces, const SentenceEncoderImpl& encoder, size_t max_bytes) {
+    constexpr size_t kChunk = 64;
+    std::vector<std::vector<int>> chunk;
+    std::vector<std::string> chunk_keys;
+    size_t bytes = 0;
+    const auto encode_chunk = [&] {
+      const SentenceEncoding encoded = encoder.encode_pieces(chunk);
+      for (size_t i = 0; i < chunk.size(); ++i) {
+        Encoding row = row_of(encoded, static_cast<int64_t>(i));
+        const size_t row_bytes = static_cast<size_t>(row.features.numel() + row.sentence.numel()) * sizeof(float);
+        if (bytes + row_bytes > max_bytes) return false;
+        bytes += row_bytes;
+        encodings_.emplace(chunk_keys[i], std::move(row));
+      }
+      chunk.clear();
+      chunk_keys.clear();
+      return true;
+    };
+    for (const std::vector<int>& row : pieces) {
+      std::string key = key_of(row);
+      if (encodings_.count(key) > 0 || std::find(chunk_keys.begin(), chunk_keys.end(), key) != chunk_keys.end()) continue;
+      chunk.push_back(row);
+      chunk_keys.push_back(std::move(key));
+      if (chunk.size() == kChunk && !encode_chunk()) return;
+    }
+    if (!chunk.empty()) encode_chunk();
+  }
+
+  size_t size() const { return encodings_.size(); }
+
+  // The batch of these captions: kept rows as kept, the others encoded together.
+  TextBatch read(const std::vector<std::vector<int>>& pieces, const SentenceEncoderImpl& encoder) const {
+    std::vector<const Encoding*> rows(pieces.size(), nullptr);
+    std::vector<std::vector<int>> missing;
+    std::vector<size_t> missing_rows;
+    for (size_t i = 0; i < pieces.size(); ++i) {
+      const auto kept = encodings_.find(key_of(pieces[i]));
+      if (kept != encodings_.end()) {
+        rows[i] = &kept->second;
+      } else {
+        missing.push_back(pieces[i]);
+        missing_rows.push_back(i);
+      }
+    }
+    if (missing.size() == pieces.size()) return to_text_batch(encoder.encode_pieces(missing));
+    std::vector<Encoding> fresh;
+    if (!missing.empty()) {
+      const SentenceEncoding encoded = encoder.encode_pieces(missing);
+      for (size_t m = 0; m < missing.size(); ++m) fresh.push_back(row_of(encoded, static_cast<int64_t>(m)));
+      for (size_t m = 0; m < missing.size(); ++m) rows[missing_rows[m]] = &fresh[m];
+    }
+    int64_t longest = 0;
+    for (const Encoding* row : rows) longest = std::max(longest, row->features.size(0));
+    const int64_t batch = static_cast<int64_t>(rows.size());
+    const at::Tensor& first = rows.front()->sentence;
+    TextBatch out;
+    out.encoder_features = torch::zeros({batch, longest, first.size(0)}, first.options());
+    out.mask = torch::zeros({batch, longest}, first.options().dtype(torch::kBool));
+    std::vector<at::Tensor> sentences;
+    for (int64_t b = 0; b < batch; ++b) {
+      const Encoding& row = *rows[static_cast<size_t>(b)];
+      const int64_t length = row.features.size(0);
+      out.encoder_features[b].narrow(0, 0, length).copy_(row.features);
+      out.mask[b].narrow(0, 0, length).fill_(true);
+      sentences.push_back(row.sentence);
+    }
+    out.encoder_sentence = torch::stack(sentences);
+    return out;
+  }
+
+ private:
+  struct Encoding {
+    at::Tensor features;  // (pieces, width)
+    at::Tensor sentence;  // (width)
+  };
+
+  static std::string key_of(const std::vector<int>& pieces) {
+    return {reinterpret_cast<const char*>(pieces.data()), pieces.size() * sizeof(int)};
+  }
+  // Row `i` of `encoded` without its padding.
+  static Encoding row_of(const SentenceEncoding& encoded, int64_t i) {
+    const int64_t length = encoded.mask[i].sum().item<int64_t>();
+    return {encoded.features[i].narrow(0, 0, length).clone(), encoded.sentence[i].clone()};
+  }
+
+  std::unordered_map<std::string, Encoding> encodings_;
+};
 
 SentenceEncoder shared_sentence_encoder() {
   static std::mutex mutex;
@@ -194,8 +302,23 @@ TextBatch CaptionReader::read(const std::vector<std::string>& captions, const Wo
                               const std::string& where) const {
   if (pieces_) return make_text_batch(captions, *pieces_, vectors, config_, where);
   if (sentence_encoder_.is_empty()) throw std::logic_error("CaptionReader::read on a reader that reads nothing");
-  return make_sentence_batch(captions, *sentence_encoder_, config_, where);
+  if (!remembered_) return make_sentence_batch(captions, *sentence_encoder_, config_, where);
+  return remembered_->read(sentence_pieces(captions, *sentence_encoder_, config_, where), *sentence_encoder_);
 }
+
+void CaptionReader::remember_corpus_encodings(const DatasetCache& cache, size_t max_bytes) {
+  if (sentence_encoder_.is_empty()) return;
+  std::vector<std::vector<int>> pieces;
+  for (const CacheClip& clip : cache.clips) {
+    if (clip.split == Split::Test) continue;
+    for (const std::string& caption : clip.captions) {
+      pieces.push_back(sentence_encoder_->pieces().encode(checked_caption(caption, "clip " + clip.id)));
+    }
+  }
+  remembered_ = std::make_shared<const RememberedEncodings>(pieces, *sentence_encoder_, max_bytes);
+}
+
+size_t CaptionReader::remembered_captions() const { return remembered_ ? remembered_->size() : 0; }
 
 void CaptionReader::check_corpus(const DatasetCache& cache, const std::string& data_name) const {
   for (const CacheClip& clip : cache.clips) {

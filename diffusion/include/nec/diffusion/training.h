@@ -44,6 +44,9 @@ namespace nec::train {
 class Communicator;
 class ConfigVisitor;
 }
+namespace nec::tat {
+class RememberedSkeletonEmbeddings;
+}
 
 namespace nec::diffusion {
 
@@ -159,6 +162,7 @@ class DiffusionTrainer {
   const DatasetCache& cache_;
   std::string data_name_;
   owo::OwoPretrainer owo_;
+  std::unique_ptr<tat::RememberedSkeletonEmbeddings> skeleton_embeddings_;  // of the frozen owo_
   text::CaptionReader captions_;  // read the captions; saved with checkpoints
   const text::WordVectors* vectors_;
   c10::Device device_;

@@ -41,6 +41,9 @@ namespace nec::train {
 class Communicator;
 class ConfigVisitor;
 }
+namespace nec::tat {
+class RememberedSkeletonEmbeddings;
+}
 
 namespace nec::evaluator {
 
@@ -171,6 +174,7 @@ class EvaluatorTrainer {
   std::string data_name_;
   Evaluator model_{nullptr};
   owo::OwoPretrainer owo_;
+  std::unique_ptr<tat::RememberedSkeletonEmbeddings> skeleton_embeddings_;  // of the frozen owo_
   text::CaptionReader captions_;  // written into every checkpoint
   const text::WordVectors* vectors_;
   c10::Device device_;

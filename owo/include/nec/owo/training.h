@@ -2,7 +2,7 @@
 // that draws augmented batches from a SkeletonSet and takes AdamW steps
 // (train/optimizer.h), and training checkpoints that resume.
 //
-//   OwoTrainingConfig config = parse_owo_training_config(read_file("configs/owo_cpu.json"), "configs/owo_cpu.json");
+//   OwoTrainingConfig config = read_owo_training_config("configs/owo_cpu.json");
 //   OwoTrainer trainer(config, split_skeleton_set(all, config.hold_out()), &vectors, torch::kCPU);
 //   for (int64_t step = trainer.resume("runs/owo") + 1; step <= config.steps; ++step) {   // or from 1
 //     PretrainLosses l = trainer.step(step);
@@ -89,6 +89,8 @@ void visit_fields(train::ConfigVisitor& v, OwoTrainingConfig& c);
 // "file: field 'optimizer.learning_rate' must be a number" (also for unknown fields, bad
 // JSON and failed validation).
 OwoTrainingConfig parse_owo_training_config(const std::string& text, const std::string& file);
+// Reads and parses the config file at `path` (InputError also when it cannot be read).
+OwoTrainingConfig read_owo_training_config(const std::string& path);
 // Every field, as a JSON document that parse_owo_training_config reads back.
 std::string owo_training_config_json(const OwoTrainingConfig& config);
 // The dotted fields whose values differ, e.g. {"optimizer.learning_rate"}; the schedule

@@ -15,6 +15,8 @@
 // a multiple of the downsampling by holding the last pose).
 #pragma once
 
+#include "nec/corpus/batch.h"
+#include "nec/corpus/dataset.h"
 #include "nec/motion/features.h"
 #include "nec/owo/encoder.h"
 #include "nec/tat/tokenizer.h"
@@ -22,7 +24,9 @@
 
 #include <ATen/core/Tensor.h>
 
+#include <cstddef>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace nec::tat {
@@ -38,6 +42,31 @@ at::Tensor embed_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<Skele
 owo::OwoOutput encode_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<Skeleton>& skeletons,
                                 const std::vector<std::vector<std::string>>& canonical_names,
                                 const text::WordVectors* vectors);
+
+// embed_skeletons for trainers whose OwO encoder is frozen: every step embeds
+// its batch's skeletons, and the corpus's own rigs come back step after step
+// (the OwO was up to a quarter of an evaluator step). The rigs of the train
+// and val clips of a cache are embedded once, 64 at a time in the cache's
+// order, and kept (as many as max_bytes holds); other rigs (those a batch
+// augmented) are embedded as they come. Kept once, before the first step, a
+// rig reads the same at every step and in a resumed run. The numbers differ
+// from embedding a batch afresh by float rounding (products of other shapes).
+class RememberedSkeletonEmbeddings {
+ public:
+  RememberedSkeletonEmbeddings(owo::OwoEncoder encoder, const text::WordVectors* vectors, const DatasetCache& cache,
+                               size_t max_bytes);
+  ~RememberedSkeletonEmbeddings();
+
+  // (B, Jmax, D) joint embeddings of the batch's skeletons, zero at padding;
+  // no gradient (a tensor autograd may read, unlike an inference one).
+  at::Tensor embed(const Batch& batch);
+  size_t kept_rigs() const { return kept_.size(); }
+
+ private:
+  owo::OwoEncoder encoder_;
+  const text::WordVectors* vectors_;
+  std::unordered_map<std::string, at::Tensor> kept_;  // (J, D) by skeleton_key
+};
 
 struct WindowOptions {
   int64_t window_frames = 64;   // frames per window, e.g. the training crop; a multiple of the downsampling

@@ -45,6 +45,8 @@ class ConfigVisitor;
 
 namespace nec::tat {
 
+class RememberedSkeletonEmbeddings;  // tat/inference.h
+
 // The optimizer a TAT config starts from: peak 2e-4, warm-up 200, no weight decay, clip 1.
 inline train::OptimizerConfig default_tat_optimizer() {
   train::OptimizerConfig config;
@@ -158,6 +160,7 @@ class TatTrainer {
   std::string data_name_;
   Tokenizer tokenizer_{nullptr};
   owo::OwoPretrainer owo_;
+  std::unique_ptr<tat::RememberedSkeletonEmbeddings> skeleton_embeddings_;  // of the frozen owo_
   const text::WordVectors* vectors_;
   c10::Device device_;
   const train::Communicator* ranks_;

@@ -27,6 +27,7 @@
 // way ends, a checkpoint is written and training stops: --resume goes on.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
@@ -36,6 +37,10 @@
 #include <vector>
 
 namespace nec::train {
+
+// How much of their frozen encoders' outputs (sentence encodings of captions,
+// OwO embeddings of rigs) a trainer keeps to reuse at later steps.
+constexpr size_t kRememberedEncodingBytes = size_t{256} << 20;
 
 // When things happen, counted in optimizer steps.
 struct TrainingSchedule {

@@ -47,6 +47,7 @@
 #include <torch/nn/modules/normalization.h>
 #include <torch/nn/pimpl.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -126,6 +127,8 @@ TextBatch make_sentence_batch(const std::vector<std::string>& captions, const Se
 // once per process and shared by every model that reads it.
 SentenceEncoder shared_sentence_encoder();
 
+class RememberedEncodings;  // text_encoder.cpp
+
 // How a model's captions become a TextBatch: the piece model of backbone
 // "pieces" (with the word vectors the caller gives) or the shared sentence
 // encoder of "use-lite". Cheap to copy.
@@ -147,6 +150,17 @@ class CaptionReader {
   int64_t count_pieces(const std::string& caption) const;
   // make_text_batch or make_sentence_batch; `vectors` as make_text_batch needs them (ignored by use-lite).
   TextBatch read(const std::vector<std::string>& captions, const WordVectors* vectors, const std::string& where) const;
+  // For trainers (use-lite; nothing for pieces): encodes the captions of the
+  // train and val clips of `cache` once, 64 at a time in the cache's order,
+  // and keeps them (as many as max_bytes holds) for this reader and its copies
+  // to read from then on; other captions are encoded as they come. Why: the
+  // corpus's captions come back every epoch, and encoding them was 6-20 % of a
+  // training step. Kept once, before the first step, a caption reads the same
+  // at every step and in a resumed run. The numbers differ from encoding a
+  // batch afresh by float rounding (products of other shapes).
+  void remember_corpus_encodings(const DatasetCache& cache, size_t max_bytes);
+  // Captions whose encodings are kept (0 when none are).
+  size_t remembered_captions() const;
   // Refuses, before training starts rather than at the step that draws it, a
   // caption of a train or val clip of `cache` that is empty, has no letter or
   // has more than config.max_pieces pieces: InputError naming `data_name`, the
@@ -161,6 +175,7 @@ class CaptionReader {
   std::string piece_model_path_;
   std::string piece_model_bytes_;
   SentenceEncoder sentence_encoder_{nullptr};
+  std::shared_ptr<const RememberedEncodings> remembered_;  // see remember_corpus_encodings; null = none
 };
 
 // The caption part of a model checkpoint: with backbone "pieces" the piece
