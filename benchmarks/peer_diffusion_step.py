@@ -36,8 +36,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from peer_layers import Linear, TextEncoder, multi_head_attention, padding_bias, USE_LITE_WIDTH
-from peer_step import (add_arguments, keep_large_allocations_in_heap, learning_rate_at, optimizer_step, print_json,
-                       run_settings)
+from peer_step import add_arguments, keep_large_allocations_in_heap, print_json, run_settings, ScheduledTrainee
 # The tokenizer's peer holds model space, Θ's random draws and the schedule already.
 from peer_tat_step import features_to_model_space, random_features, MODEL_CHANNELS
 
@@ -351,37 +350,33 @@ def synthetic_batch(c, stage, joints):
 
 # ---- The step and its measurement ----
 
-class Trainee:
+class Trainee(ScheduledTrainee):
     def __init__(self, c, stage, joints):
-        self.c, self.stage = c, stage
+        self.stage = stage
         torch.manual_seed(SEED)
         self.x, clips = synthetic_batch(c, stage, joints)
-        self.model = MotionDenoiser(c)
-        self.model.fit_statistics(clips)
+        model = MotionDenoiser(c)
+        model.fit_statistics(clips)
         if stage == "motion":
             # Stand-in for a trained pose model (synthetic.cpp synthetic_denoiser), then frozen.
             with torch.no_grad():
-                for name, p in self.model.named_parameters():
-                    if self.model.is_pose_parameter(name):
+                for name, p in model.named_parameters():
+                    if model.is_pose_parameter(name):
                         p.add_(torch.randn(p.shape) * POSE_STAND_IN_STD)
                         p.requires_grad_(False)
-        self.trained = self.model.trained_parameters(stage)
-        self.optimizer = torch.optim.AdamW(self.trained, lr=c["learning_rate"], weight_decay=c["weight_decay"])
+        super().__init__(c, model, model.trained_parameters(stage))
         self.alpha_bar = alpha_bars(c["noise_steps"])
-        self.parameters = sum(p.numel() for p in self.model.parameters())
-        self.steps = 0
 
     def step(self):
         """diffusion/synthetic.cpp synthetic_diffusion_train_step."""
-        self.steps += 1
-        lr = learning_rate_at(self.c, self.steps)
+        lr = self.next_rate()
         self.model.train()
         if self.stage == "motion":
             self.model.text.eval()  # the frozen caption encoder reads captions without dropout
         self.optimizer.zero_grad()
         loss = denoising_objective(self.model, self.alpha_bar, self.x, self.stage, self.c["velocity_weight"])
         loss.backward()
-        optimizer_step(self.optimizer, self.trained, self.c["grad_clip"], lr)
+        self.optimizer_step(lr)
         return loss.item()
 
 

@@ -32,8 +32,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from peer_layers import Linear, TextEncoder, TransformerStack, masked_mean, padding_bias, USE_LITE_WIDTH
-from peer_step import (add_arguments, keep_large_allocations_in_heap, learning_rate_at, optimizer_step, print_json,
-                       run_settings)
+from peer_step import add_arguments, keep_large_allocations_in_heap, print_json, run_settings, ScheduledTrainee
 from peer_tat_step import features_to_model_space, random_features, MODEL_CHANNELS
 
 SEED = 0               # torch.manual_seed before inputs and model, as bench_evaluator
@@ -181,26 +180,21 @@ def synthetic_batch(batch, frames, joints, embedding_dim):
 
 # ---- The step and its measurement ----
 
-class Trainee:
+class Trainee(ScheduledTrainee):
     def __init__(self, c, joints):
-        self.c = c
         torch.manual_seed(SEED)
         self.x = synthetic_batch(c["batch_size"], c["window_frames"], joints, c["joint_embedding_dim"])
-        self.model = Evaluator(c)
-        self.optimizer = torch.optim.AdamW(self.model.parameters(), lr=c["learning_rate"],
-                                           weight_decay=c["weight_decay"])
-        self.parameters = sum(p.numel() for p in self.model.parameters())
-        self.steps = 0
+        model = Evaluator(c)
+        super().__init__(c, model, model.parameters())
 
     def step(self):
         """synthetic.cpp synthetic_evaluator_train_step: EvaluatorTrainer::step after its batch is made."""
-        self.steps += 1
-        lr = learning_rate_at(self.c, self.steps)
+        lr = self.next_rate()
         self.model.train()
         self.optimizer.zero_grad()
         loss = contrastive_batch_loss(self.model, self.x)
         loss.backward()
-        optimizer_step(self.optimizer, list(self.model.parameters()), self.c["grad_clip"], lr)
+        self.optimizer_step(lr)
         return loss.item()
 
 

@@ -39,8 +39,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from peer_layers import Linear, TextEncoder, padding_bias, MASKED_SCORE, USE_LITE_WIDTH
-from peer_step import (add_arguments, keep_large_allocations_in_heap, learning_rate_at, optimizer_step, print_json,
-                       run_settings)
+from peer_step import add_arguments, keep_large_allocations_in_heap, print_json, run_settings, ScheduledTrainee
 
 SEED = 0                   # torch.manual_seed before the batch and the model, as bench_gpt
 PREFIX_TOKENS = 2          # model.cpp kPrefixTokens: sentence, skeleton
@@ -267,21 +266,16 @@ def synthetic_gpt_batch(c):
 
 # ---- The step and its measurement ----
 
-class Trainee:
+class Trainee(ScheduledTrainee):
     def __init__(self, c):
-        self.c = c
         torch.manual_seed(SEED)
         self.x = synthetic_gpt_batch(c)
-        self.model = TokenGpt(c)
-        self.optimizer = torch.optim.AdamW(self.model.parameters(), lr=c["learning_rate"],
-                                           weight_decay=c["weight_decay"])
-        self.parameters = sum(p.numel() for p in self.model.parameters())
-        self.steps = 0
+        model = TokenGpt(c)
+        super().__init__(c, model, model.parameters())
 
     def step(self):
         """synthetic_gpt_train_step: GptTrainer::step after its batch is made and its captions read."""
-        self.steps += 1
-        lr = learning_rate_at(self.c, self.steps)
+        lr = self.next_rate()
         self.model.train()
         self.optimizer.zero_grad()
         x = self.x
@@ -295,7 +289,7 @@ class Trainee:
         loss, _ = gpt_loss(first, rest, x["targets"], inputs.size(0))
         loss.backward()
         value = loss.item()
-        optimizer_step(self.optimizer, list(self.model.parameters()), self.c["grad_clip"], lr)
+        self.optimizer_step(lr)
         return value
 
 

@@ -54,6 +54,24 @@ def optimizer_step(optimizer, parameters, grad_clip, lr):
     optimizer.step()
 
 
+class ScheduledTrainee:
+    """What the peers' Trainee classes share: AdamW over the trained parameters at the scheduled rate."""
+
+    def __init__(self, c, model, trained):
+        self.c, self.model, self.trained = c, model, list(trained)
+        self.optimizer = torch.optim.AdamW(self.trained, lr=c["learning_rate"], weight_decay=c["weight_decay"])
+        self.parameters = sum(p.numel() for p in model.parameters())
+        self.steps = 0
+
+    def next_rate(self):
+        """Counts the step and returns its learning rate."""
+        self.steps += 1
+        return learning_rate_at(self.c, self.steps)
+
+    def optimizer_step(self, lr):
+        optimizer_step(self.optimizer, self.trained, self.c["grad_clip"], lr)
+
+
 def keep_large_allocations_in_heap():
     """What nec does at start (train/heap.h): glibc keeps every block in its heap and never trims it, so a step's
     large tensors reuse memory instead of being mapped and page-faulted again each step. The peers run with the

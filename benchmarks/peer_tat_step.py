@@ -33,8 +33,7 @@ import torch.nn as nn
 import torch.nn.functional as F
 
 from peer_layers import Linear
-from peer_step import (add_arguments, keep_large_allocations_in_heap, learning_rate_at, optimizer_step, print_json,
-                       run_settings)
+from peer_step import add_arguments, keep_large_allocations_in_heap, print_json, run_settings, ScheduledTrainee
 
 SEED = 0                 # torch.manual_seed before inputs and model, as bench_tat
 RESIDUAL_DILATION = 3    # tokenizer.cpp kResidualDilation
@@ -577,21 +576,16 @@ def synthetic_batch(batch, frames, joints, embedding_dim):
 
 # ---- The step and its measurement ----
 
-class Trainee:
+class Trainee(ScheduledTrainee):
     def __init__(self, c, joints):
-        self.c = c
         torch.manual_seed(SEED)
         self.x = synthetic_batch(c["batch_size"], c["window_frames"], joints, c["joint_embedding_dim"])
-        self.model = Tokenizer(c)
-        self.optimizer = torch.optim.AdamW(self.model.parameters(), lr=c["learning_rate"],
-                                           weight_decay=c["weight_decay"])
-        self.parameters = sum(p.numel() for p in self.model.parameters())
-        self.steps = 0
+        model = Tokenizer(c)
+        super().__init__(c, model, model.parameters())
 
     def step(self):
         """TatTrainer::step without the batch conversion and the OwO embeddings."""
-        self.steps += 1
-        lr = learning_rate_at(self.c, self.steps)
+        lr = self.next_rate()
         self.model.train()
         x = self.x
         reconstruction, _, commitment, perplexity = self.model(x["features"], x["joint_mask"], x["frame_mask"],
@@ -599,7 +593,7 @@ class Trainee:
         total, _ = reconstruction_loss(reconstruction, x, commitment, self.c["loss"])
         self.optimizer.zero_grad()
         total.backward()
-        optimizer_step(self.optimizer, list(self.model.parameters()), self.c["grad_clip"], lr)
+        self.optimizer_step(lr)
         self.model.quantizer.update_codebooks()
         perplexity.to("cpu", torch.float64).tolist()
         return total.item()
