@@ -95,10 +95,14 @@ int run_info(int argc, char** argv) {
   }
   fmt::print("diameter  {:.6g} (longest root-to-leaf chain, {})\n", s.diameter(),
              is_bvh_file(path) ? "file units" : "metres");
-  const FrameRateCheck rate = check_frame_rate(m);
+  const FrameRateCheck rate = check_frame_rate(clip);
   if (rate.turn_per_frame > 0.0) {
     fmt::print("turning   {:.3g}° per frame, {:.3g}°/s (median over frames of the joints' mean)\n", rate.turn_per_frame,
                rate.turn_per_second);
+  }
+  if (rate.travel_per_frame > 0.0) {
+    fmt::print("travel    {:.3g} body sizes per frame, {:.3g}/s (median over frames of the root's move)\n",
+               rate.travel_per_frame, rate.travel_per_second);
   }
   std::map<std::string, int> layouts;
   for (const ChannelLayout& layout : s.channels) ++layouts[layout_text(layout)];

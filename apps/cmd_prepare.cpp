@@ -38,6 +38,12 @@ int run_prepare(int argc, char** argv) {
   cli.option("--hold-out", "PATTERNS", "", "skeleton names or hashes (comma-separated, * ? wildcards) put wholly in test");
   cli.option("--hold-out-dataset", "NAMES", "", "datasets (comma-separated) put wholly in test");
   cli.option("--captions", "CSV", "", "caption tables `file,caption` (comma-separated paths)");
+  cli.option("--descriptions", "CSV", "",
+             "take description tables `file,description` (comma-separated paths; more columns allowed\n"
+             "when a header names them): described takes are still cut into clips, and each clip is\n"
+             "captioned with the description's parts its kinematics agree with (travel: walks/runs a\n"
+             "third of the clip; jump: a jump; sit/stand up: sits or lies; anything else: travels less\n"
+             "than half), beside the kinematic caption");
   cli.flag("--no-kinematic-captions", "keep uncaptioned takes whole and without captions");
   cli.flag("--fold-translations", "fold every non-root joint's translation into its offset, even when it varies more\n"
                                    "than the jitter limits (1 % of the diameter, 10 % of the bone)");
@@ -45,6 +51,8 @@ int run_prepare(int argc, char** argv) {
   cli.option("--threads", "N", "0", "worker threads; 0 = all cores");
   cli.flag("--quiet", "print only the summary");
   cli.example("nec prepare bandai=../shared/data/bandai dog=../shared/data/mann_dog --creature dog=dog -o cache/");
+  cli.example("nec prepare cmu=../shared/data/cmu/bvh --descriptions ../shared/data/cmu/descriptions.csv "
+              "--creature cmu=person -o cache/");
   if (!cli.parse(argc, argv)) return 0;
 
   CorpusOptions corpus;
@@ -54,7 +62,17 @@ int run_prepare(int argc, char** argv) {
   corpus.preprocess.fold_any_translation = cli.is_set("--fold-translations");
   corpus.kinematic_captions = !cli.is_set("--no-kinematic-captions");
   corpus.threads = cli.integer("--threads");
-  for (const std::string& csv : cli.list("--captions")) corpus.captions.tables.push_back(CaptionTable::read(csv));
+  // Rows naming files that do not exist are most often a wrong folder: said once per table.
+  const auto read_table = [](const std::string& csv) {
+    CaptionTable table = CaptionTable::read(csv);
+    if (const std::vector<std::string> missing = table.missing_files(); !missing.empty()) {
+      fmt::print(stderr, "warning: {} names {} of its {} files that do not exist, e.g. {}\n", csv, missing.size(),
+                 table.file_count(), missing.front());
+    }
+    return table;
+  };
+  for (const std::string& csv : cli.list("--captions")) corpus.captions.tables.push_back(read_table(csv));
+  for (const std::string& csv : cli.list("--descriptions")) corpus.captions.descriptions.push_back(read_table(csv));
   std::string default_creature = "creature";
   std::map<std::string, std::string> creature_of;
   for (const std::string& item : cli.list("--creature")) {
@@ -103,6 +121,7 @@ int run_prepare(int argc, char** argv) {
     std::string what;
     for (const std::string& change : f.changes) what += (what.empty() ? "" : "; ") + change;
     if (f.segments > 0) what += fmt::format("; cut into {} clips", f.segments);
+    if (f.described > 0) what += "; captioned from its description";
     if (f.error.empty()) {
       fmt::print("ok       {}: {}\n", f.path, what);
     } else {

@@ -36,25 +36,52 @@ uint64_t parse_seed(const std::string& text) {
   throw UsageError("--seed must be a non-negative integer, got '" + text + "'");
 }
 
+std::vector<zoo::Action> parse_action_list(const CommandLine& cli, const std::string& option) {
+  std::vector<zoo::Action> actions;
+  if (cli.value(option) == "all") return actions;
+  for (const std::string& item : cli.list(option)) {
+    zoo::Action action;
+    if (!zoo::parse_action(item, action)) {
+      std::string known;
+      for (zoo::Action a : zoo::kAllActions) known += (known.empty() ? "" : " ") + std::string(zoo::action_name(a));
+      throw UsageError(option + ": unknown action '" + item + "' (known: " + known + ")");
+    }
+    actions.push_back(action);
+  }
+  return actions;
+}
+
+// "  biped      idle walk run ..." per plan, for the help.
+std::string actions_by_plan() {
+  std::string out;
+  for (zoo::BodyPlan plan : zoo::kAllBodyPlans) {
+    out += fmt::format("\n  {:<10} ", zoo::body_plan_name(plan));
+    for (zoo::Action action : zoo::supported_actions(plan)) out += " " + std::string(zoo::action_name(action));
+  }
+  return out;
+}
+
 }  // namespace
 
 int run_zoo(int argc, char** argv) {
   CommandLine cli("nec zoo",
-                  "Write a zoo of procedural creatures (biped, quadruped, hexapod, spider, snake, bird, fish, dragon,\n"
-                  "centipede) with captioned clips: DIR/seen/<creature>/<clip>.bvh + <clip>.txt (short, mid and long\n"
-                  "caption, one per line, as `nec prepare` reads them), held-out plans under DIR/held_out/, and\n"
-                  "DIR/manifest.json describing every clip. Creature i has plan i mod the number of plans; every\n"
-                  "choice comes from the seed.");
+                  "Write a zoo of procedural creatures with captioned clips: DIR/seen/<creature>/<clip>.bvh +\n"
+                  "<clip>.txt (short, mid and long caption, one per line, as `nec prepare` reads them), held-out\n"
+                  "plans under DIR/held_out/, and DIR/manifest.json describing every clip. Creature i has plan i\n"
+                  "mod the number of plans; every choice comes from the seed. Body plans and their actions:" +
+                      actions_by_plan());
   cli.option("--out", "DIR", "", "output folder", true);
   cli.option("--creatures", "N", "9", "number of creatures");
   cli.option("--clips-per-creature", "M", "4", "clips per creature");
   cli.option("--seed", "S", "0", "seed of every choice");
   cli.option("--plans", "LIST", "all", "body plans in rotation, comma-separated, or all");
   cli.option("--hold-out", "LIST", "", "body plans (comma-separated) written under DIR/held_out/ instead of DIR/seen/");
+  cli.option("--actions", "LIST", "all", "actions (comma-separated) clips are drawn from, or all");
   cli.option("--seconds", "SECONDS", "4", "clip length");
   cli.option("--fps", "FPS", "30", "frames per second");
   cli.flag("--quiet", "print only the summary");
   cli.example("nec zoo --out zoo --creatures 9 --clips-per-creature 4 --seed 1 --hold-out spider,dragon");
+  cli.example("nec zoo --out gestures --plans biped --actions wave,clap,kick --creatures 2 --clips-per-creature 3");
   if (!cli.parse(argc, argv)) return 0;
 
   zoo::ZooOptions options;
@@ -64,6 +91,7 @@ int run_zoo(int argc, char** argv) {
   options.seed = parse_seed(cli.value("--seed"));
   options.plans = parse_plan_list(cli, "--plans");
   options.held_out_plans = parse_plan_list(cli, "--hold-out");
+  options.actions = parse_action_list(cli, "--actions");
   options.seconds = cli.number("--seconds");
   options.fps = cli.number("--fps");
   try {

@@ -302,6 +302,28 @@ TEST(Captions, CsvTableParsesQuotesHeadersAndRelativePaths) {
   EXPECT_EQ(plain.find(dir / "a.bvh"), std::vector<std::string>{"first"});
 }
 
+TEST(Captions, CsvTableWithMoreColumnsTakesTheNamedOnesAndFindsFilesBelowItsFolder) {
+  TempDir dir;
+  const std::string walk = dir.write("cmu/bvh/02_01.bvh", "");
+  dir.write("cmu/bvh/a/05_01.bvh", "");
+  dir.write("cmu/bvh/b/05_01.bvh", "");
+  const std::string csv = dir.write("cmu/descriptions.csv",
+                                    "file,description,subject\n"
+                                    "02_01.bvh,walk,\"Subject #2 (various, expressions)\"\n"
+                                    "05_01.bvh,dance,Subject #5\n"
+                                    "99_01.bvh,run,Subject #99\n");
+  const CaptionTable table = CaptionTable::read(csv);
+  // 02_01.bvh is not beside the CSV but in bvh/ below it; 05_01.bvh is below it twice, so it stays unresolved.
+  EXPECT_EQ(table.find(walk), std::vector<std::string>{"walk"});
+  EXPECT_TRUE(table.find(dir / "cmu/bvh/a/05_01.bvh").empty());
+  EXPECT_EQ(table.missing_files().size(), 2u);
+  // Columns in another order.
+  const CaptionTable swapped = CaptionTable::parse("text,subject,path\na dog sits,5,x.bvh\n", dir / "t.csv");
+  EXPECT_EQ(swapped.find(dir / "x.bvh"), std::vector<std::string>{"a dog sits"});
+  EXPECT_EQ(input_error([&] { CaptionTable::parse("file,description,subject\nx.bvh,walk\n", "/d/t.csv"); }),
+            "/d/t.csv:2: expected 3 fields as the header, found 2; quote a caption that contains commas");
+}
+
 TEST(Captions, CsvErrorsNameTheFileAndLine) {
   const std::string csv = "/data/captions.csv";
   const auto error = [&](const std::string& text) { return input_error([&] { CaptionTable::parse(text, csv); }); };

@@ -20,7 +20,7 @@ std::string cmu_walk() {
 TEST(FrameRate, RealCaptureAtItsOwnRateIsPlausible) {
   if (cmu_walk().empty()) GTEST_SKIP() << "assimp-testmodels is not installed";
   const Clip clip = read_clip(cmu_walk());
-  const FrameRateCheck check = check_frame_rate(clip.motion);
+  const FrameRateCheck check = check_frame_rate(clip);
   EXPECT_TRUE(check.warning.empty()) << check.warning;
   EXPECT_GT(check.turn_per_second, 10.0);
   EXPECT_LT(check.turn_per_second, 400.0);
@@ -36,7 +36,7 @@ TEST(FrameRate, OneSecondPerFrameOnContinuousCaptureIsFlagged) {
   EXPECT_DOUBLE_EQ(clip.motion.fps, 1.0);
   ASSERT_FALSE(clip.warnings.empty());
   EXPECT_NE(clip.warnings.back().find("more likely about"), std::string::npos) << clip.warnings.back();
-  const double likely = check_frame_rate(clip.motion).likely_fps;
+  const double likely = check_frame_rate(clip).likely_fps;
   EXPECT_GT(likely, 120.0 / 4);  // the true rate is 120 fps
   EXPECT_LT(likely, 120.0 * 4);
   // The user's rate replaces the file's, without the warning.
@@ -47,14 +47,61 @@ TEST(FrameRate, OneSecondPerFrameOnContinuousCaptureIsFlagged) {
   for (const std::string& w : fixed.warnings) EXPECT_EQ(w.find("more likely"), std::string::npos) << w;
 }
 
+Clip two_joint_clip(int frames, double fps) {
+  Clip clip;
+  clip.skeleton.add_joint("root", -1, Vec3::Zero(), ChannelLayout::position_rotations(EulerOrder::ZXY));
+  clip.skeleton.add_joint("tip", 0, Vec3(0, 1, 0), ChannelLayout::rotations(EulerOrder::ZXY));
+  clip.motion = Motion::rest(clip.skeleton, frames, fps);
+  return clip;
+}
+
+// A walk at 30 fps written with Frame Time 1: joints that turn 0.06° a frame (too little to judge alone), a root
+// that travels 2 % of the body's size a frame.
+Clip mistimed_walk(double turn_degrees_per_frame) {
+  Clip clip = two_joint_clip(600, 1.0);
+  for (int t = 0; t < clip.motion.frame_count; ++t) {
+    const double swing = turn_degrees_per_frame * M_PI / 180.0 * t;
+    clip.motion.rotation(t, 1) = Quat(Eigen::AngleAxisd(swing, Vec3::UnitX()));
+    clip.motion.translation(t, 0) = Vec3(0, 1, 0.02 * t);
+  }
+  return clip;
+}
+
 TEST(FrameRate, StillClipsAreNotJudged) {
-  Skeleton s;
-  s.add_joint("root", -1, Vec3::Zero(), ChannelLayout::position_rotations(EulerOrder::ZXY));
-  s.add_joint("tip", 0, Vec3(0, 1, 0), ChannelLayout::rotations(EulerOrder::ZXY));
-  const Motion idle = Motion::rest(s, 100, 1.0);  // one frame per second, nothing moves
+  const Clip idle = two_joint_clip(100, 1.0);  // one frame per second, nothing moves
   const FrameRateCheck check = check_frame_rate(idle);
   EXPECT_TRUE(check.warning.empty()) << check.warning;
   EXPECT_EQ(check.likely_fps, 0.0);
+}
+
+TEST(FrameRate, RootTravelFlagsAWalkTooStillInItsJointsToJudge) {
+  const FrameRateCheck check = check_frame_rate(mistimed_walk(0.06));
+  EXPECT_NEAR(check.travel_per_frame, 0.02, 1e-9);
+  EXPECT_NEAR(check.travel_per_second, 0.02, 1e-9);
+  ASSERT_FALSE(check.warning.empty());
+  EXPECT_NE(check.warning.find("root travels 0.02 body sizes/s"), std::string::npos) << check.warning;
+  EXPECT_GT(check.likely_fps, 15.0);  // the walk was captured at 30 fps
+  EXPECT_LT(check.likely_fps, 60.0);
+}
+
+TEST(FrameRate, ARunAtOneFrameASecondIsFlaggedByBothWitnessesTogether) {
+  // Joints 6°/s on average and a root at 0.1 body sizes/s: each alone could be slow real motion, together they
+  // say about 7 fps.
+  Clip run = mistimed_walk(12.0);
+  for (int t = 0; t < run.motion.frame_count; ++t) run.motion.translation(t, 0) = Vec3(0, 1, 0.1 * t);
+  const FrameRateCheck check = check_frame_rate(run);
+  ASSERT_FALSE(check.warning.empty());
+  EXPECT_NEAR(check.likely_fps, 8.0, 0.5);
+}
+
+TEST(FrameRate, SlowTravelBesideRealJointTurningIsAShuffleNotAWrongRate) {
+  // The same root travel per second, but joints that turn 20°/s on average (40° the one that moves): a real
+  // slow shuffle, so nothing is said.
+  EXPECT_TRUE(check_frame_rate(mistimed_walk(40.0)).warning.empty());
+  // At 30 fps the walk is plausible in both.
+  Clip walk = mistimed_walk(0.06);
+  walk.motion.fps = 30.0;
+  EXPECT_TRUE(check_frame_rate(walk).warning.empty()) << check_frame_rate(walk).warning;
 }
 
 }  // namespace

@@ -170,9 +170,9 @@ TEST_F(Zoo, ClipSpecsCoverActionsSpeedsAndTurns) {
   ZooOptions options = small("unused");
   std::map<std::string, int> actions;
   int left = 0, right = 0, still_starts = 0;
-  for (int i = 0; i < 45; ++i) {
+  for (int i = 0; i < 90; ++i) {
     const Creature creature = make_creature(zoo_creature_plan(options, i), zoo_creature_seed(options, i));
-    for (int k = 0; k < 6; ++k) {
+    for (int k = 0; k < 8; ++k) {
       const MotionSpec spec = zoo_clip_spec(creature, options, k);
       EXPECT_TRUE(supports_action(creature.plan, spec.action));
       ++actions[std::string(body_plan_name(creature.plan)) + "/" + std::string(action_name(spec.action))];

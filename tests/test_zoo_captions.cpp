@@ -103,10 +103,13 @@ TEST_F(ZooCaptions, TurnsAreNamedWithTheRightSide) {
     for (uint64_t phrasing = 0; phrasing < 4; ++phrasing) {
       const Captions captions = caption_motion(c.creature, c.spec, phrasing);
       const TurnClass turn = classify_turn(c.spec);
-      const bool attack = c.spec.action == Action::Attack && c.creature.plan == BodyPlan::Biped;
+      const Action a = c.spec.action;
+      const bool gesture = a == Action::Wave || a == Action::RaiseHands || a == Action::Point || a == Action::Kick;
+      const bool sided =
+          (a == Action::Attack && c.creature.plan == BodyPlan::Biped) || (gesture && c.spec.side != Side::None);
       for (const std::string& line : {captions.mid_text, captions.long_text}) {
-        if (attack) {
-          // The punching arm, not a turn.
+        if (sided) {
+          // The punching, waving or pointing arm, the kicking leg: not a turn.
           EXPECT_TRUE(has_word(line, c.spec.side == Side::Left ? "left" : "right")) << line;
           EXPECT_FALSE(has_word(line, c.spec.side == Side::Left ? "right" : "left")) << line;
         } else if (turn == TurnClass::Straight) {
@@ -209,6 +212,37 @@ TEST_F(ZooCaptions, JumpsSayForwardOrInPlace) {
   for (uint64_t phrasing = 0; phrasing < 8; ++phrasing) {
     const std::string mid = caption_motion(dog, synthesize_motion(dog, spec).spec, phrasing).mid_text;
     EXPECT_TRUE(has_any(mid, {"forward", "ahead"})) << mid;
+  }
+}
+
+TEST_F(ZooCaptions, GesturesNameTheirHandOrLegAndStayInPlace) {
+  const Creature person = make_creature(BodyPlan::Biped, 2);
+  for (Action action : {Action::Wave, Action::RaiseHands, Action::Point, Action::Kick}) {
+    for (Side side : {Side::Left, Side::Right, Side::None}) {
+      MotionSpec spec;
+      spec.action = action;
+      spec.side = side;
+      spec.seed = 5;
+      const MotionSpec made = synthesize_motion(person, spec).spec;
+      const bool both = made.side == Side::None;
+      EXPECT_EQ(both, side == Side::None && (action == Action::Wave || action == Action::RaiseHands));
+      for (uint64_t phrasing = 0; phrasing < 6; ++phrasing) {
+        const std::string mid = caption_motion(person, made, phrasing).mid_text;
+        if (both) {
+          EXPECT_TRUE(has_word(mid, "both")) << mid;
+        } else {
+          EXPECT_TRUE(has_word(mid, made.side == Side::Left ? "left" : "right")) << mid;
+          EXPECT_FALSE(has_word(mid, made.side == Side::Left ? "right" : "left")) << mid;
+        }
+        EXPECT_FALSE(has_any(mid, {"quick", "slow", "leisurely"})) << mid;  // no travel speed
+      }
+    }
+  }
+  for (Action action : {Action::Clap, Action::Bow, Action::Crouch}) {
+    MotionSpec spec;
+    spec.action = action;
+    const std::string mid = caption_motion(person, synthesize_motion(person, spec).spec, 1).mid_text;
+    EXPECT_FALSE(has_any(mid, {"left", "right", "ahead", "quick", "slow"})) << mid;
   }
 }
 

@@ -514,6 +514,115 @@ TEST(ZooMotion, FlightIsAirborneAndTakeOffClimbs) {
   }
 }
 
+// Biped gestures, measured with forward kinematics in the creature's frame (it faces +Z, its left is +X).
+class BipedGestures : public ::testing::Test {
+ protected:
+  struct Made {
+    Pose pose;
+    SynthesizedMotion motion;
+  };
+  Made make(Action action, Side side, uint64_t seed = 3) const {
+    MotionSpec spec = spec_for(person_, action, 1.0, 0.0, seed);
+    spec.side = side;
+    SynthesizedMotion made = synthesize_motion(person_, spec);
+    Pose pose = forward_kinematics(person_.skeleton, made.motion);
+    return {std::move(pose), std::move(made)};
+  }
+  const Limb& limb(LimbKind kind, Side side) const {
+    for (const Limb* l : person_.limbs_of(kind)) {
+      if (l->side == side) return *l;
+    }
+    throw std::logic_error("no such limb");
+  }
+  int hand(Side side) const { return limb(LimbKind::Arm, side).joints.back(); }
+  int shoulder(Side side) const { return limb(LimbKind::Arm, side).joints.front(); }
+  int foot(Side side) const { return limb(LimbKind::Leg, side).joints.back(); }
+  int head() const { return person_.limbs_of(LimbKind::Head).at(0)->joints.back(); }
+  // The middle of the clip, where every gesture is held.
+  int middle(const Made& m) const { return m.motion.motion.frame_count / 2; }
+
+  const Creature person_ = make_creature(BodyPlan::Biped, 12);
+};
+
+TEST_F(BipedGestures, WavingRaisesTheNamedHandAndSwingsIt) {
+  const Made right = make(Action::Wave, Side::Right);
+  const int t = middle(right);
+  EXPECT_GT(right.pose.position(t, hand(Side::Right)).y(), right.pose.position(t, shoulder(Side::Right)).y());
+  EXPECT_LT(right.pose.position(t, hand(Side::Left)).y(), right.pose.position(t, shoulder(Side::Left)).y());
+  // The raised hand swings from side to side: its lateral range over the held part is a real wave.
+  double low = 1e9, high = -1e9;
+  for (int f = t - 15; f <= t + 15; ++f) {
+    const double x = right.pose.position(f, hand(Side::Right)).x();
+    low = std::min(low, x);
+    high = std::max(high, x);
+  }
+  EXPECT_GT(high - low, 0.1 * person_.leg_length);
+  // Both hands when no side is named; at the start and end both are down.
+  const Made both = make(Action::Wave, Side::None);
+  for (Side side : {Side::Left, Side::Right}) {
+    EXPECT_GT(both.pose.position(t, hand(side)).y(), both.pose.position(t, shoulder(side)).y());
+    EXPECT_LT(both.pose.position(0, hand(side)).y(), both.pose.position(0, shoulder(side)).y());
+  }
+}
+
+TEST_F(BipedGestures, RaisedHandsArePointingAndClappingHandsGoWhereTheySay) {
+  const Made raised = make(Action::RaiseHands, Side::Left);
+  const int t = middle(raised);
+  EXPECT_GT(raised.pose.position(t, hand(Side::Left)).y(), raised.pose.position(t, head()).y());
+  EXPECT_LT(raised.pose.position(t, hand(Side::Right)).y(), raised.pose.position(t, shoulder(Side::Right)).y());
+
+  const Made pointing = make(Action::Point, Side::Right);
+  const Vec3 reach = pointing.pose.position(t, hand(Side::Right)) - pointing.pose.position(t, shoulder(Side::Right));
+  EXPECT_GT(reach.z(), 2.0 * std::abs(reach.y())) << "the arm points ahead, level";
+  EXPECT_GT(reach.z(), 0.3 * person_.leg_length);
+
+  const Made clapping = make(Action::Clap, Side::None);
+  double closest = 1e9, widest = 0.0;
+  for (int f = t - 20; f <= t + 20; ++f) {
+    const double gap = (clapping.pose.position(f, hand(Side::Left)) - clapping.pose.position(f, hand(Side::Right))).norm();
+    closest = std::min(closest, gap);
+    widest = std::max(widest, gap);
+  }
+  const double shoulders =
+      (clapping.pose.position(0, shoulder(Side::Left)) - clapping.pose.position(0, shoulder(Side::Right))).norm();
+  EXPECT_LT(closest, 0.5 * shoulders) << "the hands meet";
+  EXPECT_GT(widest, closest + 0.3 * shoulders) << "and part again";
+}
+
+TEST_F(BipedGestures, BowCrouchAndKickMoveTheBodyOnPlantedFeet) {
+  const Made bow = make(Action::Bow, Side::None);
+  const int last = bow.motion.motion.frame_count - 1;
+  double lowest_head = 1e9;
+  for (int f = 0; f <= last; ++f) lowest_head = std::min(lowest_head, bow.pose.position(f, head()).y());
+  const double standing_head = bow.pose.position(0, head()).y();
+  EXPECT_LT(lowest_head, standing_head - 0.2 * person_.leg_length) << "the head goes down";
+  EXPECT_NEAR(bow.pose.position(last, head()).y(), standing_head, 0.05 * person_.leg_length) << "and up again";
+  EXPECT_LT(foot_stats(person_, bow.motion).max_slip, kSlipTolerance * person_.leg_length);
+
+  const Made crouch = make(Action::Crouch, Side::None);
+  EXPECT_LT(crouch.pose.position(last, 0).y(), crouch.pose.position(0, 0).y() - 0.2 * person_.leg_length);
+  EXPECT_LT(foot_stats(person_, crouch.motion).max_height, kGroundTolerance * person_.leg_length);
+
+  const Made kick = make(Action::Kick, Side::Left);
+  double highest = 0.0, furthest = 0.0;
+  for (int f = 0; f <= last; ++f) {
+    const Vec3 p = kick.pose.position(f, foot(Side::Left)) - kick.pose.position(f, 0);
+    highest = std::max(highest, kick.pose.position(f, foot(Side::Left)).y());
+    furthest = std::max(furthest, p.z());
+  }
+  EXPECT_GT(highest, 0.4 * person_.leg_length) << "the kicking foot rises towards hip height";
+  EXPECT_GT(furthest, 0.5 * person_.leg_length) << "in front of the body";
+  for (const LegTrack& leg : kick.motion.legs) {
+    const bool kicking = person_.limbs[leg.limb].side == Side::Left;
+    const int stance = static_cast<int>(std::count(leg.stance.begin(), leg.stance.end(), 1));
+    if (kicking) {
+      EXPECT_LT(stance, last) << "the kicking leg leaves the ground";
+    } else {
+      EXPECT_EQ(stance, last + 1) << "the standing leg stays planted";
+    }
+  }
+}
+
 // Tail secondary motion lags: the phase of the tail tip's sway trails the base's.
 TEST(ZooMotion, TailSwaysWithPhaseLag) {
   const Creature creature = make_creature(BodyPlan::Dragon, 1);

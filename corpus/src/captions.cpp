@@ -1,6 +1,7 @@
 // Captions from sidecar text files, CSV tables and Bandai Namco labels.
 #include "nec/corpus/captions.h"
 
+#include "nec/motion/clip_file.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 
@@ -104,13 +105,28 @@ std::vector<std::string> split_csv_line(std::string_view line, const std::string
   return fields;
 }
 
-bool is_header(const std::vector<std::string>& fields) {
+// Columns of a table: which field names the file and which holds the caption.
+struct Columns {
+  size_t count = 2;
+  size_t file = 0;
+  size_t caption = 1;
+};
+
+// The columns a header row names (`file,caption`, `path,text`, `file,description,subject`, ...); nullopt for a
+// row that is not a header.
+std::optional<Columns> header_columns(const std::vector<std::string>& fields) {
   static const std::array<const char*, 4> file_names = {"file", "path", "filename", "bvh"};
   static const std::array<const char*, 3> caption_names = {"caption", "text", "description"};
-  const std::string first = lower(fields[0]);
-  const std::string second = lower(fields[1]);
-  return std::find(file_names.begin(), file_names.end(), first) != file_names.end() &&
-         std::find(caption_names.begin(), caption_names.end(), second) != caption_names.end();
+  const auto column = [&](const auto& names) -> std::optional<size_t> {
+    for (size_t i = 0; i < fields.size(); ++i) {
+      if (std::find(names.begin(), names.end(), lower(fields[i])) != names.end()) return i;
+    }
+    return std::nullopt;
+  };
+  const auto file = column(file_names);
+  const auto caption = column(caption_names);
+  if (!file || !caption) return std::nullopt;
+  return Columns{fields.size(), *file, *caption};
 }
 
 // ---------------------------------------------------------------------------
@@ -330,28 +346,67 @@ std::optional<BandaiLabel> label_from_json(const fs::path& json_path, const fs::
 // CaptionTable
 
 CaptionTable CaptionTable::read(const std::string& csv_path) {
-  return parse(read_file(csv_path, kMaxTextBytes), csv_path);
+  CaptionTable table = parse(read_file(csv_path, kMaxTextBytes), csv_path);
+  table.find_missing_below(fs::path(csv_path).parent_path());
+  return table;
+}
+
+void CaptionTable::find_missing_below(const std::filesystem::path& folder) {
+  const std::vector<std::string> missing = missing_files();
+  if (missing.empty()) return;
+  const std::string base = path_key(folder.empty() ? fs::path(".") : folder);
+  // Files below the folder by their path relative to it; at most kMaxListed looked at, so a table beside a
+  // huge tree costs bounded time.
+  constexpr size_t kMaxListed = 200000;
+  std::vector<std::string> below;
+  std::error_code ec;
+  for (auto it = fs::recursive_directory_iterator(base, fs::directory_options::follow_directory_symlink, ec);
+       !ec && it != fs::recursive_directory_iterator() && below.size() < kMaxListed; it.increment(ec)) {
+    if (it->is_regular_file(ec) && is_motion_file(it->path().string())) below.push_back(path_key(it->path()));
+  }
+  for (const std::string& key : missing) {
+    const std::string relative = fs::path(key).lexically_relative(base).string();
+    if (relative.empty() || relative.rfind("..", 0) == 0) continue;
+    const std::string suffix = "/" + relative;
+    std::vector<const std::string*> found;
+    for (const std::string& path : below) {
+      if (path.size() > suffix.size() && path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0) {
+        found.push_back(&path);
+      }
+    }
+    if (found.size() != 1) continue;  // none, or ambiguous: left missing (the caller warns)
+    auto node = captions_.extract(key);
+    std::vector<std::string>& captions = captions_[*found.front()];
+    captions.insert(captions.end(), node.mapped().begin(), node.mapped().end());
+  }
 }
 
 CaptionTable CaptionTable::parse(std::string_view text, const std::string& csv_path) {
   CaptionTable table;
   const fs::path base = fs::path(csv_path).parent_path();
   bool first_record = true;
+  Columns columns;
   for_each_line(strip_bom(text), [&](long number, std::string_view line) {
     if (trim(line).empty()) return;
     const std::vector<std::string> fields = split_csv_line(line, csv_path, number);
-    if (fields.size() != 2) {
-      throw InputError(csv_path, number,
-                       "expected 2 fields (file,caption), found " + std::to_string(fields.size()) +
-                           "; quote a caption that contains commas");
+    if (first_record) {
+      first_record = false;
+      if (const auto header = header_columns(fields)) {
+        columns = *header;
+        return;
+      }
     }
-    const bool header = first_record && is_header(fields);
-    first_record = false;
-    if (header) return;
-    if (fields[0].empty()) throw InputError(csv_path, number, "empty file name");
-    const std::string caption(trim(fields[1]));
-    if (caption.empty()) throw InputError(csv_path, number, "empty caption for '" + fields[0] + "'");
-    fs::path file(fields[0]);
+    if (fields.size() != columns.count) {
+      throw InputError(csv_path, number,
+                       "expected " + std::to_string(columns.count) + " fields" +
+                           (columns.count == 2 ? std::string(" (file,caption)") : std::string(" as the header")) +
+                           ", found " + std::to_string(fields.size()) + "; quote a caption that contains commas");
+    }
+    const std::string& name = fields[columns.file];
+    if (name.empty()) throw InputError(csv_path, number, "empty file name");
+    const std::string caption(trim(fields[columns.caption]));
+    if (caption.empty()) throw InputError(csv_path, number, "empty caption for '" + name + "'");
+    fs::path file(name);
     if (file.is_relative()) file = base / file;
     table.captions_[path_key(file)].push_back(caption);
   });
@@ -401,6 +456,14 @@ std::vector<std::string> captions_for(const std::string& bvh_path, const Caption
     if (const auto label = bandai_label(bvh_path)) return bandai_captions(*label);
   }
   return {};
+}
+
+std::string take_description_for(const std::string& path, const CaptionSources& sources) {
+  for (const auto& table : sources.descriptions) {
+    const auto& found = table.find(path);
+    if (!found.empty()) return found.front();
+  }
+  return "";
 }
 
 // ---------------------------------------------------------------------------

@@ -2,12 +2,16 @@
 // preprocessing, in parallel over files.
 #include "nec/corpus/corpus.h"
 
+#include "nec/corpus/take_description.h"
+
 #include "nec/motion/clip_file.h"
 #include "nec/motion/error.h"
 
 #include <algorithm>
 #include <atomic>
 #include <filesystem>
+#include <optional>
+#include <stdexcept>
 #include <thread>
 
 namespace nec {
@@ -42,11 +46,25 @@ CacheEntry rejected_entry(const CorpusFile& file, const std::string& reason) {
   return entry;
 }
 
-// One take (a BVH file, or one animation of an asset) -> entries, captioned or segmented.
+// A described clip's captions: the description's canonical one, the segmenter's, then both sets of paraphrases.
+std::vector<std::string> interleave(const std::vector<std::string>& described, const std::vector<std::string>& kinematic) {
+  std::vector<std::string> out;
+  for (size_t i = 0; i < std::max(described.size(), kinematic.size()); ++i) {
+    if (i < described.size()) out.push_back(described[i]);
+    if (i < kinematic.size()) out.push_back(kinematic[i]);
+  }
+  return out;
+}
+
+// One take (a BVH file, or one animation of an asset) -> entries, captioned or segmented; a described take
+// (description non-null) is segmented and its clips get the description's parts that agree with them.
 void load_take(const CorpusFile& file, const Clip& take, const std::string& id, std::vector<std::string> captions,
-               const CorpusOptions& options, FileOutput& out) {
+               const TakeDescription* description, const CorpusOptions& options, FileOutput& out) {
   const bool first_take = out.entries.empty();
   const bool segment = captions.empty() && options.kinematic_captions;
+  if (!segment && captions.empty() && description != nullptr) {
+    captions = described_clip_captions(*description, Segment{}, options.segment.creature, /*whole_take=*/true);
+  }
   if (!segment) {
     CacheEntry entry;
     entry.prepared = preprocess(take, file.path, options.preprocess);
@@ -72,7 +90,11 @@ void load_take(const CorpusFile& file, const Clip& take, const std::string& id, 
     entry.prepared = preprocess(piece, file.path, options.preprocess);
     entry.source = file.path;
     entry.dataset = file.dataset;
-    entry.captions = s.captions;
+    entry.captions = description == nullptr
+                         ? s.captions
+                         : interleave(described_clip_captions(*description, s, options.segment.creature,
+                                                              cut.segments.size() == 1),
+                                      s.captions);
     entry.id = id + "#" + std::to_string(i);
     // The segment's first frame at the corpus frame rate.
     const double fps = entry.prepared.clip.motion.fps;
@@ -89,20 +111,31 @@ FileOutput load_file(const CorpusFile& file, const CorpusOptions& options) {
   out.result.dataset = file.dataset;
   std::vector<Clip> takes;
   std::vector<std::string> captions;
+  std::optional<TakeDescription> description;
   try {
     takes = read_clips(file.path);
     captions = captions_for(file.path, options.captions);
+    if (const std::string text = take_description_for(file.path, options.captions); !text.empty()) {
+      try {
+        description = parse_take_description(text);
+      } catch (const std::invalid_argument& e) {
+        throw InputError(file.path, 0, e.what());
+      }
+    }
   } catch (const InputError& e) {
     out.result.error = e.what();
     out.entries.push_back(rejected_entry(file, e.what()));
     return out;
   }
-  // A file's captions describe its one take; the animations of a file that holds several are segmented.
+  // A file's captions and description describe its one take; the animations of a file that holds several are
+  // segmented.
   for (const Clip& take : takes) {
     const bool several = takes.size() > 1;
     load_take(file, take, several ? file.path + "#" + take.name : file.path,
-              several ? std::vector<std::string>{} : captions, options, out);
+              several ? std::vector<std::string>{} : captions,
+              several || !description ? nullptr : &*description, options, out);
   }
+  if (description) ++out.result.described;
   if (out.result.clips == 0 && out.result.error.empty()) out.result.error = "every segment was rejected";
   return out;
 }
@@ -148,7 +181,7 @@ CorpusResult load_corpus(const std::vector<CorpusFile>& files, const CorpusOptio
       try {
         outputs[i] = load_file(files[i], options);
       } catch (const std::exception& e) {
-        outputs[i].result = {files[i].path, files[i].dataset, 0, 0, e.what(), {}};
+        outputs[i].result = {files[i].path, files[i].dataset, 0, 0, 0, e.what(), {}};
         outputs[i].entries = {rejected_entry(files[i], e.what())};
       }
     }

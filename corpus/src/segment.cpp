@@ -200,12 +200,6 @@ struct Group {
   Direction direction = Direction::Forward;  // of travel, relative to the facing
 };
 
-std::string article(const std::string& noun) {
-  if (noun.empty()) return "a";
-  const char c = static_cast<char>(std::tolower(static_cast<unsigned char>(noun[0])));
-  return (c == 'a' || c == 'e' || c == 'i' || c == 'o' || c == 'u') ? "an" : "a";
-}
-
 std::string side_word(Turn t) { return t == Turn::Left ? "left" : "right"; }
 
 // Removes repeats and a straight stretch between two turns the same way: {L, None, L} -> {L}.
@@ -484,7 +478,7 @@ std::vector<Group> describable_groups(const std::vector<Phase>& phases, const Ki
 // between lying or sitting and being up ("gets up and ...", "sits down"); null otherwise.
 void describe(Segment& segment, const KinematicSignals& s, const SegmentOptions& o, const Group* before) {
   const std::vector<Group> groups = describable_groups(segment.phases, s, o, segment.end - segment.begin);
-  const std::string subject = article(o.creature) + " " + o.creature;
+  const std::string subject = indefinite_article(o.creature) + " " + o.creature;
   for (int variant = 0; variant < 3; ++variant) {
     std::string caption = subject;
     for (size_t i = 0; i < groups.size(); ++i) {
@@ -592,6 +586,12 @@ TakeSegmentation segment_take(const Clip& take, const SegmentOptions& options) {
     result.segments.push_back(std::move(segment));
   }
   return result;
+}
+
+std::string indefinite_article(std::string_view noun) {
+  if (noun.empty()) return "a";
+  const char c = static_cast<char>(std::tolower(static_cast<unsigned char>(noun[0])));
+  return (c == 'a' || c == 'e' || c == 'i' || c == 'o' || c == 'u') ? "an" : "a";
 }
 
 }  // namespace nec

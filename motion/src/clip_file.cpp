@@ -74,7 +74,7 @@ std::vector<Clip> read_whole_file(const std::string& path, const ClipReadOptions
       clip.warnings.push_back(fmt::format("frame rate {:.6g} fps in the file replaced by {:.6g} (--source-fps)",
                                           clip.motion.fps, options.fps));
       clip.motion.fps = options.fps;
-    } else if (std::string warning = check_frame_rate(clip.motion).warning; !warning.empty()) {
+    } else if (std::string warning = check_frame_rate(clip).warning; !warning.empty()) {
       clip.warnings.push_back(std::move(warning));
     }
     std::vector<Clip> clips;

@@ -21,7 +21,9 @@ constexpr ActionName kActionNames[] = {
     {Action::Jump, "jump"},       {Action::Sit, "sit"},         {Action::LieDown, "lie_down"},
     {Action::Attack, "attack"},   {Action::Slither, "slither"}, {Action::Swim, "swim"},
     {Action::Fly, "fly"},         {Action::Glide, "glide"},     {Action::TakeOff, "take_off"},
-    {Action::FlapWings, "flap_wings"},
+    {Action::FlapWings, "flap_wings"}, {Action::Wave, "wave"},     {Action::RaiseHands, "raise_hands"},
+    {Action::Point, "point"},     {Action::Clap, "clap"},       {Action::Bow, "bow"},
+    {Action::Crouch, "crouch"},   {Action::Kick, "kick"},
 };
 
 double fraction(double x) { return x - std::floor(x); }
@@ -80,7 +82,8 @@ std::vector<Action> supported_actions(BodyPlan plan) {
   using A = Action;
   switch (plan) {
     case BodyPlan::Biped:
-      return {A::Idle, A::Walk, A::Run, A::Turn, A::Jump, A::Sit, A::Attack};
+      return {A::Idle, A::Walk,       A::Run,   A::Turn, A::Jump, A::Sit,    A::Attack,
+              A::Wave, A::RaiseHands, A::Point, A::Clap, A::Bow,  A::Crouch, A::Kick};
     case BodyPlan::Quadruped:
       return {A::Idle, A::Walk, A::Trot, A::Gallop, A::Turn, A::Jump, A::Sit, A::LieDown, A::Attack};
     case BodyPlan::Hexapod:

@@ -132,9 +132,9 @@ MotionSpec effective_spec(const Creature& creature, const Rig& rig, const Motion
     const double turn_limit = max_turn_rate(creature, rig, action, spec.speed);
     spec.turn_rate = std::clamp(spec.turn_rate, -turn_limit, turn_limit);
   }
-  if (action == Action::Attack) {
+  if (action == Action::Attack || action == Action::Point || action == Action::Kick) {
     if (spec.side == Side::None) spec.side = (mix_seed(spec.seed, 0xA77AC) & 1) ? Side::Left : Side::Right;
-  } else {
+  } else if (action != Action::Wave && action != Action::RaiseHands) {
     spec.side = Side::None;
   }
   return spec;

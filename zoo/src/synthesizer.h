@@ -19,6 +19,7 @@ enum class SwingStyle {
   Step,    // arc from one foothold to the next
   Tuck,    // follows the body, folded under it (jumps, flight)
   Strike,  // rises in front of the body and strikes the ground ahead (attacks)
+  Kick,    // knee up, the leg snaps out forward at hip height and back, then down where it stood
 };
 
 // Where a foot stands: the tip on the ground and the foot's heading.
@@ -52,6 +53,12 @@ class Synthesizer {
   void pose_appendages(int f, double t);
   void assemble_frame(int f);
   void pose_wing(const Appendage& wing, int f, double t);
+  struct ArmGesture {
+    double weight = 0.0;           // 0: the ordinary arm pose, 1: fully in the gesture
+    Vec3 upper = -Vec3::UnitY();   // upper arm direction in the chest's heading frame
+    Vec3 lower = -Vec3::UnitY();   // forearm direction, same frame
+  };
+  ArmGesture arm_gesture(const Appendage& arm, int f, double t) const;
   void plan_legs();
   std::vector<Swing> leg_swings(size_t leg) const;
   void adjust_height();

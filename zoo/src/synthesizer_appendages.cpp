@@ -47,6 +47,56 @@ void Synthesizer::pose_appendages(int f, double t) {
   }
 }
 
+// Where a gesture puts an arm: upper arm and forearm directions in the chest's heading frame (x to the
+// creature's left, y up, z forward), and how far the arm is in the gesture (0: the ordinary pose).
+Synthesizer::ArmGesture Synthesizer::arm_gesture(const Appendage& arm, int f, double t) const {
+  const Action action = spec_.action;
+  const bool both = spec_.side == Side::None;
+  const bool this_arm = both || arm.limb->side == spec_.side;
+  const double side = side_sign(arm.limb->side);
+  ArmGesture g;
+  const double in_gesture = pulse(t, event_a_, event_b_, event_c_, event_d_);
+  const auto mirrored = [side](double x, double y, double z) { return Vec3(side * x, y, z).normalized(); };
+  switch (action) {
+    case Action::Wave: {
+      if (!this_arm) break;
+      // The forearm swings about the forward axis, twice a second, around an upright hand.
+      const double swing = radians(12.0) + radians(28.0) * std::sin(2.0 * kPi * 2.0 * (t - event_b_));
+      g = {in_gesture, mirrored(0.75, 0.55, 0.2), mirrored(std::sin(swing), std::cos(swing), 0.15)};
+      break;
+    }
+    case Action::RaiseHands:
+      if (this_arm) g = {in_gesture, mirrored(0.3, 1.0, 0.1), mirrored(0.15, 1.0, 0.05)};
+      break;
+    case Action::Point:
+      if (this_arm) g = {in_gesture, mirrored(0.15, 0.05, 1.0), mirrored(0.05, 0.05, 1.0)};
+      break;
+    case Action::Clap: {
+      // Hands meet in front of the chest and part again, about two claps a second: the forearm turns in by what
+      // brings the wrist to the midline, whatever the shoulders' width and the arm's proportions.
+      const double apart = 0.5 - 0.5 * std::cos(2.0 * kPi * 2.2 * std::max(0.0, t - event_b_));
+      const Vec3 upper = mirrored(0.25, -0.35, 0.9);
+      if (arm.lengths.size() < 2) break;
+      const int pivot = arm.limb->joints[arm.pivot];
+      const int chest = skeleton_.parents[arm.limb->joints.front()];
+      const Quat heading = yaw_rotation(heading_angle(global_[at(f, chest)]));
+      const Vec3 from_midline = heading.conjugate() * (position_[at(f, pivot)] - position_[at(f, chest)]);
+      const double elbow_x = from_midline.x() + upper.x() * arm.lengths[0];
+      const double inward = std::clamp(-elbow_x / arm.lengths[1], -0.95, 0.95) * (1.0 - apart);
+      const double x = inward + side * 0.1 * apart;
+      g = {in_gesture, upper, Vec3(x, 0.2, std::sqrt(std::max(0.05, 1.0 - x * x - 0.04))).normalized()};
+      break;
+    }
+    case Action::Kick:
+      // Out to the sides for balance.
+      g = {in_gesture, mirrored(0.6, -0.75, 0.15), mirrored(0.55, -0.45, 0.45)};
+      break;
+    default:
+      break;
+  }
+  return g;
+}
+
 // Converts the midline's global targets (in local_) into locals top-down,
 // adds arms, and runs forward kinematics for the frame.
 void Synthesizer::assemble_frame(int f) {
@@ -82,7 +132,7 @@ void Synthesizer::assemble_frame(int f) {
     double swing = -radians(running ? 35.0 : 18.0) * share * std::cos(2.0 * kPi * (clock + same_side_phase));
     double elbow = radians(running ? 85.0 : 20.0) * share + radians(10.0) * (1.0 - share);
     double raise = 0.0;  // sideways, away from the body
-    if (action == Action::Sit) {
+    if (action == Action::Sit || action == Action::Crouch) {
       const double w = ramp_between(t, event_a_, event_b_);
       swing = radians(45.0) * w;
       elbow = radians(10.0) + radians(35.0) * w;
@@ -109,8 +159,12 @@ void Synthesizer::assemble_frame(int f) {
     }
     const Quat chest = yaw_rotation(heading_angle(global_[at(f, parent)]));
     const Vec3 down(side * (0.12 + std::sin(raise)), -1.0, 0.0);
-    const Vec3 upper = chest * (axis_angle(Vec3::UnitX(), -swing) * down.normalized());
-    const Vec3 lower = chest * (axis_angle(Vec3::UnitX(), -(swing + elbow)) * Vec3(side * 0.05, -1.0, 0.0).normalized());
+    Vec3 upper = chest * (axis_angle(Vec3::UnitX(), -swing) * down.normalized());
+    Vec3 lower = chest * (axis_angle(Vec3::UnitX(), -(swing + elbow)) * Vec3(side * 0.05, -1.0, 0.0).normalized());
+    if (const ArmGesture gesture = arm_gesture(arm, f, t); gesture.weight > 0.0) {
+      upper = ((1.0 - gesture.weight) * upper + gesture.weight * (chest * gesture.upper)).normalized();
+      lower = ((1.0 - gesture.weight) * lower + gesture.weight * (chest * gesture.lower)).normalized();
+    }
     std::vector<int> chain(joints.begin() + arm.pivot, joints.end());
     std::vector<Vec3> points(chain.size());
     points[0] = position_[at(f, pivot)];

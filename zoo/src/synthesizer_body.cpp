@@ -33,6 +33,31 @@ void Synthesizer::plan_body() {
       event_c_ = event_b_ + 0.4 * k;            // strike held, recovery starts
       event_d_ = event_c_ + 0.7 * k;            // recovered
       break;
+    case Action::Wave:
+    case Action::RaiseHands:
+    case Action::Point:
+    case Action::Clap:
+      event_a_ = 0.12 * T;                      // the arms start to rise
+      event_b_ = event_a_ + 0.5 * k;            // in the gesture
+      event_d_ = T - 0.08 * T;                  // down again
+      event_c_ = std::max(event_b_, event_d_ - 0.5 * k);  // lowering starts
+      break;
+    case Action::Bow:
+      event_a_ = 0.2 * T;                       // starts to bend
+      event_b_ = event_a_ + 0.6 * k;            // bowed
+      event_c_ = event_b_ + 0.5 * k;            // straightening starts
+      event_d_ = event_c_ + 0.7 * k;            // upright
+      break;
+    case Action::Crouch:
+      event_a_ = 0.15 * T;                      // starts to go down
+      event_b_ = event_a_ + std::min(1.0, 0.3 * T);  // low, and stays
+      break;
+    case Action::Kick:
+      event_a_ = 0.25 * T;                      // the knee comes up
+      event_b_ = event_a_ + 0.3 * k;            // the leg snaps out
+      event_c_ = event_b_ + 0.25 * k;           // pulled back
+      event_d_ = event_c_ + 0.4 * k;            // the foot is down
+      break;
     default:
       break;
   }
@@ -56,6 +81,10 @@ void Synthesizer::plan_body() {
     switch (spec_.action) {
       case Action::Idle:
       case Action::FlapWings:
+      case Action::Wave:
+      case Action::RaiseHands:
+      case Action::Point:
+      case Action::Clap:
         y += 0.008 * r * breath;
         local_offset.x() = 0.02 * r * std::sin(2.0 * kPi * 0.13 * t + sway_phase_);
         if (spec_.action == Action::FlapWings) {
@@ -131,6 +160,29 @@ void Synthesizer::plan_body() {
           pitch = std::clamp(chest_rise, 0.0, radians(40.0)) * w;
         }
         y += 0.006 * r * breath * w;
+        break;
+      }
+      case Action::Bow: {
+        // Bends at the hips: the pelvis tips forward and slides back a little over planted feet.
+        const double bow = pulse(t, event_a_, event_b_, event_c_, event_d_);
+        pitch = -radians(50.0) * bow;
+        local_offset.z() = -0.12 * r * bow;
+        y -= 0.04 * r * bow;
+        break;
+      }
+      case Action::Crouch: {
+        const double w = ramp_between(t, event_a_, event_b_);
+        y -= 0.4 * r * w;
+        local_offset.z() = -0.1 * r * w;
+        pitch = -radians(20.0) * w;
+        y += 0.006 * r * breath * w;
+        break;
+      }
+      case Action::Kick: {
+        // Leans back as the leg goes out.
+        const double kick = pulse(t, event_a_, event_b_, event_c_, event_d_);
+        pitch = radians(10.0) * kick;
+        y += 0.008 * r * breath;
         break;
       }
       case Action::LieDown: {

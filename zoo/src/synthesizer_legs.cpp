@@ -70,6 +70,9 @@ std::vector<Swing> Synthesizer::leg_swings(size_t leg_index) const {
         swings.push_back({event_a_ + 0.05, event_d_, SwingStyle::Strike});
       }
       break;
+    case Action::Kick:
+      if (leg.side == spec_.side && leg.pair == 0) swings.push_back({event_a_, event_d_, SwingStyle::Kick});
+      break;
     default:
       break;
   }
@@ -108,6 +111,21 @@ Vec3 Synthesizer::swing_position(size_t leg_index, const Swing& swing, const Vec
       }
       const Vec3 line = std::isfinite(swing.end) && std::isfinite(swing.begin) ? Vec3(from + (to - from) * smoothstep(u)) : from;
       return (1.0 - w) * line + w * tucked;
+    }
+    case SwingStyle::Kick: {
+      // Knee up (the foot under it, forward), the leg snaps out to hip height, back to the knee-up pose, down.
+      const double x = 0.8 * leg.end_from_hip.x();
+      const Vec3 chambered = hip + heading * Vec3(x, -0.6 * r, 0.35 * r);
+      const Vec3 extended = hip + heading * Vec3(x, -0.15 * r, 0.9 * r);
+      const double span = swing.end - swing.begin;
+      const double snap = std::clamp((event_b_ - swing.begin) / span, 0.2, 0.6);
+      const double back = std::clamp((event_c_ - swing.begin) / span, snap + 0.05, 0.85);
+      if (u < snap) return from + (chambered - from) * smoothstep(u / snap);
+      if (u < back) {
+        const double w = (u - snap) / (back - snap);
+        return chambered + (extended - chambered) * std::sin(kPi * w);  // out and back within [snap, back)
+      }
+      return chambered + (to - chambered) * smoothstep((u - back) / (1.0 - back));
     }
     case SwingStyle::Strike: {
       const Vec3 raised = hip + heading * Vec3(0.6 * leg.end_from_hip.x(), 0.3 * r, 0.45 * r + std::max(0.0, leg.end_from_hip.z()));

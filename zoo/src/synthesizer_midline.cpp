@@ -156,6 +156,7 @@ void Synthesizer::pose_midline(int f, double t) {
         }
         if (action == Action::Fly || action == Action::Glide) pitch = -0.3 * pitch_[f];
         if (action == Action::Sit && creature_.plan != BodyPlan::Biped) pitch = 0.2 * pitch_[f];
+        if (action == Action::Bow) pitch = 1.2 * pitch_[f];  // the head goes down with the bow
         break;
       }
       case LimbKind::Tail: {

@@ -57,8 +57,21 @@ bool is_held_out(const ZooOptions& options, BodyPlan plan) {
 }
 
 // The action of each clip: the plan's actions in a seeded order, reshuffled every round.
-Action clip_action(const Creature& creature, int clip_index) {
-  std::vector<Action> actions = supported_actions(creature.plan);
+// The actions a creature's clips are drawn from: what its plan supports, among the options' actions.
+std::vector<Action> drawn_actions(BodyPlan plan, const ZooOptions& options) {
+  std::vector<Action> actions = supported_actions(plan);
+  if (options.actions.empty()) return actions;
+  actions.erase(std::remove_if(actions.begin(), actions.end(),
+                               [&](Action a) {
+                                 return std::find(options.actions.begin(), options.actions.end(), a) ==
+                                        options.actions.end();
+                               }),
+                actions.end());
+  return actions;
+}
+
+Action clip_action(const Creature& creature, const ZooOptions& options, int clip_index) {
+  std::vector<Action> actions = drawn_actions(creature.plan, options);
   const int n = static_cast<int>(actions.size());
   SplitMix64 random(mix_seed(creature.seed, 0xAC7100 + static_cast<uint64_t>(clip_index / n)));
   for (int i = n - 1; i > 0; --i) std::swap(actions[i], actions[random.below(i + 1)]);
@@ -121,6 +134,11 @@ void ZooOptions::validate() const {
       fail("held-out plan '" + std::string(body_plan_name(plan)) + "' is not among the plans");
     }
   }
+  for (BodyPlan plan : rotation) {
+    if (drawn_actions(plan, *this).empty()) {
+      fail("a " + std::string(body_plan_name(plan)) + " supports none of the actions asked for");
+    }
+  }
   MotionSpec spec;
   spec.seconds = seconds;
   spec.fps = fps;
@@ -140,7 +158,7 @@ MotionSpec zoo_clip_spec(const Creature& creature, const ZooOptions& options, in
   const uint64_t clip_seed = mix_seed(creature.seed, 1 + static_cast<uint64_t>(clip_index));
   SplitMix64 random(clip_seed);
   MotionSpec spec;
-  spec.action = clip_action(creature, clip_index);
+  spec.action = clip_action(creature, options, clip_index);
   spec.seconds = options.seconds;
   spec.fps = options.fps;
   spec.seed = clip_seed;
@@ -164,7 +182,13 @@ MotionSpec zoo_clip_spec(const Creature& creature, const ZooOptions& options, in
     spec.start_from_still = !airborne && random.chance(0.35);
     spec.stop_at_end = !airborne && random.chance(0.3);
   }
-  if (spec.action == Action::Attack) spec.side = random.chance(0.5) ? Side::Left : Side::Right;
+  if (spec.action == Action::Attack || spec.action == Action::Point || spec.action == Action::Kick) {
+    spec.side = random.chance(0.5) ? Side::Left : Side::Right;
+  }
+  if (spec.action == Action::Wave || spec.action == Action::RaiseHands) {
+    const Side sides[] = {Side::Left, Side::Right, Side::None};  // None: both hands
+    spec.side = sides[random.below(3)];
+  }
   return spec;
 }
 

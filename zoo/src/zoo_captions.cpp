@@ -186,6 +186,34 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
     case Action::FlapWings:
       verbs = {{"flaps its wings", "flapping its wings"}, {"beats its wings", "beating its wings"}};
       break;
+    case Action::Wave:
+      verbs = {{"waves", "waving"}, {"waves hello", "waving hello"}, {"waves goodbye", "waving goodbye"}};
+      break;
+    case Action::RaiseHands:
+      if (spec.side == Side::None) {
+        verbs = {{"raises its hands", "raising its hands"}, {"puts its hands up", "putting its hands up"},
+                 {"lifts its arms", "lifting its arms"}};
+      } else {
+        verbs = {{"raises a hand", "raising a hand"}, {"puts a hand up", "putting a hand up"},
+                 {"lifts an arm", "lifting an arm"}};
+      }
+      break;
+    case Action::Point:
+      verbs = {{"points", "pointing"}, {"points ahead", "pointing ahead"}, {"points forward", "pointing forward"}};
+      break;
+    case Action::Clap:
+      verbs = {{"claps", "clapping"}, {"claps its hands", "clapping its hands"}, {"applauds", "applauding"}};
+      break;
+    case Action::Bow:
+      verbs = {{"bows", "bowing"}, {"takes a bow", "taking a bow"}, {"bows down", "bowing down"}};
+      break;
+    case Action::Crouch:
+      verbs = {{"crouches", "crouching"}, {"crouches down", "crouching down"}, {"squats down", "squatting down"},
+               {"ducks down", "ducking down"}};
+      break;
+    case Action::Kick:
+      verbs = {{"kicks", "kicking"}, {"throws a kick", "throwing a kick"}, {"kicks forward", "kicking forward"}};
+      break;
   }
   return verbs;
 }
@@ -362,6 +390,43 @@ std::vector<std::string> part_details(const Creature& creature, const MotionSpec
       main = {"crouching first, then pushing off with its legs", "tucking its legs in the air"};
       extra.push_back("landing and absorbing the impact");
       break;
+    case Action::Wave:
+      if (spec.side == Side::None) {
+        main = {"its arms raised high", "swinging its hands from side to side", "its forearms swaying back and forth"};
+        extra.push_back("then lowering its arms again");
+      } else {
+        main = {"its arm raised high", "swinging its hand from side to side", "its forearm swaying back and forth"};
+        extra.push_back("then lowering its arm again");
+      }
+      break;
+    case Action::RaiseHands:
+      if (spec.side == Side::None) {
+        main = {"stretching its arms straight up", "its hands high above its head", "reaching for the sky"};
+        extra.push_back("holding them there");
+      } else {
+        main = {"stretching its arm straight up", "its hand high above its head", "reaching up"};
+        extra.push_back("holding it there");
+      }
+      break;
+    case Action::Point:
+      main = {"its arm held straight out in front", "stretching its arm forward", "its arm level with its shoulder"};
+      break;
+    case Action::Clap:
+      main = {"bringing its hands together in front of its chest", "its hands meeting in front of it again and again"};
+      break;
+    case Action::Bow:
+      main = {"bending forward at the waist", "lowering its head and upper body", "tipping its torso forward"};
+      extra.push_back("then straightening up again");
+      break;
+    case Action::Crouch:
+      main = {"bending its knees deeply", "lowering its hips", "getting low to the ground"};
+      extra.push_back("staying down");
+      break;
+    case Action::Kick:
+      main = {"lifting its knee, then snapping its leg out", "swinging its leg up in front of it",
+              "standing on one leg as it kicks"};
+      extra.push_back("its arms out for balance");
+      break;
     case Action::Attack:
       switch (plan) {
         case BodyPlan::Biped:
@@ -453,10 +518,41 @@ std::string predicate(const Creature& creature, const MotionSpec& spec, const Ve
                                                             "from the ground and climbs"});
     case Action::FlapWings:
       return phraser.pick<std::string>({"stands and " + verb.finite, verb.finite + " while standing on the ground"});
+    case Action::Wave: {
+      if (spec.side == Side::None) {
+        return phraser.pick<std::string>({verb.finite + " with both hands", verb.finite + " with both arms",
+                                          "waves both arms over its head"});
+      }
+      const std::string s = side_word(spec.side);
+      return phraser.pick<std::string>({verb.finite + " with its " + s + " hand", "raises its " + s + " hand and waves",
+                                        verb.finite + " its " + s + " arm"});
+    }
+    case Action::RaiseHands: {
+      if (spec.side == Side::None) {
+        return phraser.pick<std::string>({"raises both hands", "raises both arms above its head", "puts both hands up"});
+      }
+      const std::string s = side_word(spec.side);
+      return phraser.pick<std::string>({"raises its " + s + " hand", "lifts its " + s + " arm above its head",
+                                        "puts its " + s + " hand up"});
+    }
+    case Action::Point: {
+      const std::string s = side_word(spec.side);
+      return phraser.pick<std::string>({"points forward with its " + s + " hand", "points ahead with its " + s + " arm",
+                                        "points at something in front of it with its " + s + " hand"});
+    }
+    case Action::Kick: {
+      const std::string s = side_word(spec.side);
+      return phraser.pick<std::string>({"kicks with its " + s + " leg", "kicks forward with its " + s + " foot",
+                                        "throws a " + s + " kick"});
+    }
+    case Action::Crouch:
+      return verb.finite + phraser.pick<std::string>({"", " and stays low", " and holds the pose"});
     case Action::Sit:
     case Action::LieDown:
       return verb.finite + phraser.pick<std::string>({"", " and stays there", " and rests"});
     case Action::Idle:
+    case Action::Clap:
+    case Action::Bow:
       return verb.finite;
     default:
       return travel_predicate(verb, spec, speed, phraser);

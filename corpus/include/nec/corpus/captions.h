@@ -22,6 +22,7 @@
 // give such files a sidecar or a table row instead.
 #pragma once
 
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
@@ -34,9 +35,13 @@ namespace nec {
 // (`file,caption`, also `path`/`filename` and `text`/`description`) is
 // optional; fields may be quoted ("a dog walks, then sits", "" for a quote);
 // several rows may name the same file; relative paths are relative to the
-// CSV's folder. Blank lines are skipped; an empty caption, an empty file name,
-// a row without exactly two fields or an unterminated quote is an InputError
-// naming the CSV and the line.
+// CSV's folder; read() also finds a relative path that names no file there in
+// the folders below it (CMU's descriptions.csv names takes kept in bvh/), when
+// exactly one file matches. A header row may name more columns (`file,
+// description,subject`): the file and caption columns are taken, the rest
+// ignored. Blank lines are skipped; an empty caption, an empty file name, a row
+// whose field count differs from the header's (two without a header) or an
+// unterminated quote is an InputError naming the CSV and the line.
 class CaptionTable {
  public:
   static CaptionTable read(const std::string& csv_path);
@@ -51,6 +56,8 @@ class CaptionTable {
   std::vector<std::string> missing_files() const;
 
  private:
+  void find_missing_below(const std::filesystem::path& folder);
+
   std::map<std::string, std::vector<std::string>> captions_;  // normalized path -> captions
 };
 
@@ -58,11 +65,17 @@ struct CaptionSources {
   bool sidecar = true;               // read `clip.txt` next to `clip.bvh`
   std::vector<CaptionTable> tables;  // CSV tables, tried in order
   bool bandai = true;                // Bandai JSON labels or file-name pattern
+  // Tables of take descriptions (`file,description`): a described take without captions is still cut by the
+  // segmenter, and each clip gets the description's parts that agree with it (corpus/take_description.h).
+  std::vector<CaptionTable> descriptions;
 };
 
 // Captions of one BVH file from the first source that applies; {} if none.
 // Throws InputError for a malformed sidecar, Bandai JSON or label list.
 std::vector<std::string> captions_for(const std::string& bvh_path, const CaptionSources& sources = {});
+
+// The description of a take from the first description table that names it; "" when none does.
+std::string take_description_for(const std::string& path, const CaptionSources& sources);
 
 // Captions from a sidecar text file: one per non-empty line (trimmed, CRLF
 // and a UTF-8 byte order mark tolerated). A file without any caption is an

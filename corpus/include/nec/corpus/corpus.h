@@ -46,6 +46,7 @@ struct CorpusFileResult {
   std::string dataset;
   int clips = 0;                      // accepted clips made from the file
   int segments = 0;                   // > 0 when the segmenter cut the take
+  int described = 0;                  // 1 when a description table described the take
   std::string error;                  // reader error or rejection reason of the whole file
   std::vector<std::string> changes;   // preprocessing report of the first clip
 };

@@ -28,6 +28,7 @@
 #include "nec/motion/kinematic_signals.h"
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace nec {
@@ -93,5 +94,8 @@ TakeSegmentation segment_take(const Clip& take, const SegmentOptions& options = 
 
 // Measurements of frames [begin, end) of a take.
 SegmentMeasurements measure_segment(const KinematicSignals& signals, int begin, int end);
+
+// "a" or "an" before a noun of a caption, by its first letter ("an elephant", "a dog").
+std::string indefinite_article(std::string_view noun);
 
 }  // namespace nec

@@ -56,14 +56,23 @@ enum class Action {
   Glide,      // winged plans: wings spread, slowly descending
   TakeOff,    // winged plans: from standing to climbing flight
   FlapWings,  // winged plans: stands and beats its wings
+  // Gestures of bipeds (arms and a leg), standing in place:
+  Wave,        // raises a hand (side) or both (Side::None) and waves it from side to side
+  RaiseHands,  // raises a hand (side) or both (Side::None) above the head and holds it there
+  Point,       // points straight ahead with one arm (side)
+  Clap,        // claps both hands in front of the chest
+  Bow,         // bends forward at the hips and straightens again
+  Crouch,      // bends the knees and lowers the body, then stays low
+  Kick,        // kicks forward with one leg (side), the arms out for balance
 };
 
 constexpr Action kAllActions[] = {Action::Idle,  Action::Walk,    Action::Trot,   Action::Run,     Action::Gallop,
                                   Action::Turn,  Action::Jump,    Action::Sit,    Action::LieDown, Action::Attack,
                                   Action::Slither, Action::Swim,  Action::Fly,    Action::Glide,   Action::TakeOff,
-                                  Action::FlapWings};
+                                  Action::FlapWings, Action::Wave, Action::RaiseHands, Action::Point, Action::Clap,
+                                  Action::Bow,   Action::Crouch,  Action::Kick};
 
-std::string_view action_name(Action action);  // "idle", "walk", ..., "lie_down", "take_off", "flap_wings"
+std::string_view action_name(Action action);  // "idle", "walk", ..., "lie_down", "take_off", "raise_hands"
 // Parses a name as printed by action_name; false when unknown.
 bool parse_action(std::string_view name, Action& action);
 
@@ -73,7 +82,7 @@ bool is_locomotion(Action action);
 bool is_gait(Action action);
 
 // Actions a body plan supports, in kAllActions order:
-//   biped      idle walk run turn jump sit attack
+//   biped      idle walk run turn jump sit attack wave raise_hands point clap bow crouch kick
 //   quadruped  idle walk trot gallop turn jump sit lie_down attack
 //   hexapod    idle walk run turn jump lie_down attack
 //   spider     idle walk run turn jump lie_down attack
@@ -93,7 +102,8 @@ struct MotionSpec {
   bool stop_at_end = false;       // locomotion: decelerates and stands still at the end
   double seconds = 4.0;           // clip length, e.g. 4
   double fps = 30.0;              // frames per second, e.g. 30
-  Side side = Side::None;         // Attack: striking side (arm, lunge direction); None = chosen from seed
+  Side side = Side::None;         // Attack, Point, Kick: striking side (arm, lunge direction, leg); None = chosen
+                                  // from seed. Wave, RaiseHands: the hand; None = both
   uint64_t seed = 0;              // small style variations: step height, breathing rate, head motion
 
   // Throws std::invalid_argument naming the first bad field.

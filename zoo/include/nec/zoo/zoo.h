@@ -36,6 +36,8 @@ struct ZooOptions {
   uint64_t seed = 0;                    // every choice derives from it
   std::vector<BodyPlan> plans;          // plans in rotation; empty = all nine
   std::vector<BodyPlan> held_out_plans; // written under held_out/ instead of seen/; must be among the plans
+  std::vector<Action> actions;          // actions clips are drawn from (each creature: those its plan supports);
+                                        // empty = all; every plan in rotation must support at least one
   double seconds = 4.0;                 // clip length, e.g. 4
   double fps = 30.0;                    // frames per second, e.g. 30
 
