@@ -11,19 +11,27 @@
 namespace nec::app {
 namespace {
 
-std::vector<zoo::BodyPlan> parse_plan_list(const CommandLine& cli, const std::string& option) {
-  std::vector<zoo::BodyPlan> plans;
-  if (cli.value(option) == "all") return plans;
+// A comma-separated list of names (or "all": empty), each parsed by `parse`; an unknown one is a usage error
+// that lists the known names.
+template <typename T, size_t N, typename Parse, typename Name>
+std::vector<T> parse_name_list(const CommandLine& cli, const std::string& option, const std::string& what,
+                               const T (&known)[N], Parse parse, Name name) {
+  std::vector<T> out;
+  if (cli.value(option) == "all") return out;
   for (const std::string& item : cli.list(option)) {
-    zoo::BodyPlan plan;
-    if (!zoo::parse_body_plan(item, plan)) {
-      std::string known;
-      for (zoo::BodyPlan p : zoo::kAllBodyPlans) known += (known.empty() ? "" : " ") + std::string(zoo::body_plan_name(p));
-      throw UsageError(option + ": unknown body plan '" + item + "' (known: " + known + ")");
+    T value;
+    if (!parse(item, value)) {
+      std::string names;
+      for (const T& k : known) names += (names.empty() ? "" : " ") + std::string(name(k));
+      throw UsageError(option + ": unknown " + what + " '" + item + "' (known: " + names + ")");
     }
-    plans.push_back(plan);
+    out.push_back(value);
   }
-  return plans;
+  return out;
+}
+
+std::vector<zoo::BodyPlan> parse_plan_list(const CommandLine& cli, const std::string& option) {
+  return parse_name_list(cli, option, "body plan", zoo::kAllBodyPlans, zoo::parse_body_plan, zoo::body_plan_name);
 }
 
 uint64_t parse_seed(const std::string& text) {
@@ -37,18 +45,7 @@ uint64_t parse_seed(const std::string& text) {
 }
 
 std::vector<zoo::Action> parse_action_list(const CommandLine& cli, const std::string& option) {
-  std::vector<zoo::Action> actions;
-  if (cli.value(option) == "all") return actions;
-  for (const std::string& item : cli.list(option)) {
-    zoo::Action action;
-    if (!zoo::parse_action(item, action)) {
-      std::string known;
-      for (zoo::Action a : zoo::kAllActions) known += (known.empty() ? "" : " ") + std::string(zoo::action_name(a));
-      throw UsageError(option + ": unknown action '" + item + "' (known: " + known + ")");
-    }
-    actions.push_back(action);
-  }
-  return actions;
+  return parse_name_list(cli, option, "action", zoo::kAllActions, zoo::parse_action, zoo::action_name);
 }
 
 // "  biped      idle walk run ..." per plan, for the help.

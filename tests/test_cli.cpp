@@ -141,6 +141,52 @@ TEST_F(Cli, ViewWritesAStripAndRejectsBadArguments) {
 
 // Rigged assets through the commands: described, converted to BVH and back onto the asset, prepared
 // with BVH files, and the outputs nec cannot write refused with nothing written.
+TEST_F(Cli, ZooListsPlansAndActionsAndDrawsOnlyTheAskedOnes) {
+  const CommandResult help = run_nec("zoo --help");
+  ASSERT_EQ(help.exit_code, 0);
+  EXPECT_TRUE(contains(help.output, "biped")) << help.output;
+  EXPECT_TRUE(contains(help.output, "wave raise_hands point clap bow crouch kick")) << help.output;
+  const CommandResult made = run_nec("zoo --out " + path("z") + " --plans biped --actions wave,kick --creatures 2 "
+                                     "--clips-per-creature 4 --seconds 1 --quiet");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  int clips = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(path("z"))) {
+    if (entry.path().extension() != ".bvh") continue;
+    ++clips;
+    const std::string name = entry.path().stem().string();
+    EXPECT_TRUE(contains(name, "_wave") || contains(name, "_kick")) << name;
+  }
+  EXPECT_EQ(clips, 8);
+  const CommandResult unknown = run_nec("zoo --out " + path("u") + " --actions moonwalk");
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_TRUE(contains(unknown.output, "unknown action 'moonwalk'")) << unknown.output;
+  const CommandResult none = run_nec("zoo --out " + path("n") + " --plans fish --actions wave");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_TRUE(contains(none.output, "a fish supports none of the actions")) << none.output;
+  EXPECT_FALSE(fs::exists(path("u")) || fs::exists(path("n")));
+}
+
+TEST_F(Cli, PrepareCaptionsClipsFromTakeDescriptionsFoundBelowTheTable) {
+  if (!fs::exists(kCmu)) GTEST_SKIP() << "assimp-testmodels is not installed";
+  fs::create_directories(path("cmu/bvh"));
+  fs::copy_file(kCmu, path("cmu/bvh/01_01.bvh"));
+  // As CMU's own table: a third column, rows naming takes kept in bvh/, one take that is not there.
+  const std::string csv = write("cmu/descriptions.csv", "file,description,subject\n"
+                                                        "01_01.bvh,\"playground - forward jumps, turn around\",1\n"
+                                                        "99_01.bvh,walk,99\n");
+  const CommandResult run = run_nec("prepare cmu=" + path("cmu/bvh") + " --descriptions " + csv +
+                                    " --creature cmu=person -o " + path("cache"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_TRUE(contains(run.output, "names 1 of its 2 files that do not exist")) << run.output;
+  EXPECT_TRUE(contains(run.output, "captioned from its description")) << run.output;
+  const nlohmann::json manifest = nlohmann::json::parse(read_file(path("cache/manifest.json")));
+  int described = 0;
+  for (const auto& clip : manifest["clips"]) {
+    described += clip["captions"][0].get<std::string>().find("jumps forward") != std::string::npos;
+  }
+  EXPECT_GT(described, 0);
+}
+
 TEST_F(Cli, AssetsInAndOutThroughTheCommands) {
   const std::string wuson = "/usr/share/assimp/models/X/Testwuson.X";
   if (!fs::exists(wuson)) GTEST_SKIP() << "assimp-testmodels is not installed";

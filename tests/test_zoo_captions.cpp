@@ -246,6 +246,29 @@ TEST_F(ZooCaptions, GesturesNameTheirHandOrLegAndStayInPlace) {
   }
 }
 
+TEST_F(ZooCaptions, BackingUpAndSidesteppingSayWhichWay) {
+  for (BodyPlan plan : {BodyPlan::Biped, BodyPlan::Spider}) {
+    const Creature creature = make_creature(plan, 3);
+    for (double direction : {180.0, 90.0, -90.0}) {
+      MotionSpec spec;
+      spec.action = Action::Walk;
+      spec.direction = direction;
+      spec.speed = 0.6 * typical_speed(creature, Action::Walk);
+      const MotionSpec made = synthesize_motion(creature, spec).spec;
+      for (uint64_t phrasing = 0; phrasing < 8; ++phrasing) {
+        const std::string mid = caption_motion(creature, made, phrasing).mid_text;
+        if (direction == 180.0) {
+          EXPECT_TRUE(has_any(mid, {"back", "reverse"})) << mid;
+        } else {
+          EXPECT_TRUE(has_any(mid, {direction > 0 ? "left" : "right"})) << mid;
+          EXPECT_FALSE(has_any(mid, {direction > 0 ? "right" : "left"})) << mid;
+        }
+        EXPECT_FALSE(has_any(mid, {"forward", "ahead"})) << mid;
+      }
+    }
+  }
+}
+
 TEST(ZooCaptionsBasics, ManyPhrasingsAndDeterministic) {
   const Creature spider = make_creature(BodyPlan::Spider, 7);
   MotionSpec spec;

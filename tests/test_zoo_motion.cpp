@@ -466,6 +466,35 @@ TEST(ZooMotion, TurnRateTurnsTheRightWayAndSpeedIsMet) {
   }
 }
 
+// Backing up and sidestepping: the root travels the asked way relative to where the body faces, which does not
+// turn, and the stance feet stay planted.
+TEST(ZooMotion, WalksBackwardAndSidewaysFacingAhead) {
+  for (BodyPlan plan : {BodyPlan::Biped, BodyPlan::Quadruped, BodyPlan::Spider}) {
+    const Creature creature = make_creature(plan, 5);
+    for (double direction : {180.0, 90.0, -90.0}) {
+      MotionSpec spec = spec_for(creature, Action::Walk, 0.6, 40.0, 5);
+      spec.direction = direction;
+      const SynthesizedMotion made = synthesize_motion(creature, spec);
+      EXPECT_EQ(made.spec.turn_rate, 0.0) << "backing up and sidestepping go straight";
+      const Motion& m = made.motion;
+      const Vec3 travel = m.translation(m.frame_count - 1, 0) - m.translation(0, 0);
+      const double facing = heading_angle(m.rotation(0, 0));
+      const double moved = std::atan2(travel.x(), travel.z());
+      const double relative = std::remainder(moved - facing, 2 * kPi) * 180.0 / kPi;
+      EXPECT_NEAR(std::remainder(relative - direction, 360.0), 0.0, 20.0)
+          << body_plan_name(plan) << " asked " << direction << ", went " << relative;
+      EXPECT_GT(std::hypot(travel.x(), travel.z()), 0.3 * made.spec.speed * creature.body_length * spec.seconds);
+      EXPECT_NEAR(std::remainder(heading_angle(m.rotation(m.frame_count - 1, 0)) - facing, 2 * kPi), 0.0, 0.2);
+      const FootStats stats = foot_stats(creature, made);
+      EXPECT_LT(stats.max_slip, 2 * kSlipTolerance * creature.leg_length) << body_plan_name(plan) << " " << direction;
+      EXPECT_GT(stats.swing_frames, 0);
+    }
+  }
+  MotionSpec bad;
+  bad.direction = 200.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
 TEST(ZooMotion, StartsStillAndStopsStill) {
   const Creature creature = make_creature(BodyPlan::Quadruped, 12);
   MotionSpec spec = spec_for(creature, Action::Trot, 1.0, 20.0, 12);

@@ -128,7 +128,9 @@ std::string skeleton_key(const Skeleton& skeleton, const std::vector<std::string
 RememberedSkeletonEmbeddings::RememberedSkeletonEmbeddings(owo::OwoEncoder encoder, const text::WordVectors* vectors,
                                                            const DatasetCache& cache, size_t max_bytes)
     : encoder_(std::move(encoder)), vectors_(vectors) {
-  constexpr size_t kChunk = 64;
+  // Rigs are embedded in chunks of similar size, smallest first, each bounded in items × joints² (OwO's edge
+  // features are B × J × J × 16): one 140-joint centipede pads no chunk of 20-joint rigs.
+  constexpr size_t kChunkCells = 64 * 48 * 48;
   std::vector<bool> used(cache.skeletons.size(), false);
   for (const CacheClip& clip : cache.clips) {
     if (clip.split != Split::Test) used.at(static_cast<size_t>(clip.skeleton)) = true;
@@ -148,11 +150,16 @@ RememberedSkeletonEmbeddings::RememberedSkeletonEmbeddings(owo::OwoEncoder encod
     names.clear();
     return true;
   };
+  std::vector<size_t> order;
   for (size_t s = 0; s < cache.skeletons.size(); ++s) {
-    if (!used[s]) continue;
+    if (used[s]) order.push_back(s);
+  }
+  const auto joints = [&](size_t s) { return static_cast<size_t>(cache.skeletons[s].skeleton.joint_count()); };
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return joints(a) < joints(b); });
+  for (size_t s : order) {
+    if (!chunk.empty() && (chunk.size() + 1) * joints(s) * joints(s) > kChunkCells && !embed_chunk()) return;
     chunk.push_back(cache.skeletons[s].skeleton);
     names.push_back(cache.skeletons[s].canonical_names);
-    if (chunk.size() == kChunk && !embed_chunk()) return;
   }
   if (!chunk.empty()) embed_chunk();
 }

@@ -118,6 +118,9 @@ void MotionSpec::validate() const {
     fail("turn_rate must be within +-720 degrees per second, got " + std::to_string(turn_rate));
   }
   if (static_cast<int>(seconds * fps) < 2) fail("the clip must have at least 2 frames");
+  if (!std::isfinite(direction) || std::abs(direction) > 180.0) {
+    fail("direction must be within +-180 degrees, got " + std::to_string(direction));
+  }
 }
 
 SpeedClass classify_speed(double speed, double typical) {

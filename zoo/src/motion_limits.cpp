@@ -128,6 +128,12 @@ MotionSpec effective_spec(const Creature& creature, const Rig& rig, const Motion
       }
       break;
   }
+  if (action != Action::Walk) spec.direction = 0.0;
+  if (spec.direction != 0.0) {
+    // Backing up and sidestepping go straight, at a careful pace.
+    spec.turn_rate = 0.0;
+    spec.speed = std::min(spec.speed, 0.8 * typical);
+  }
   if (is_locomotion(action)) {
     const double turn_limit = max_turn_rate(creature, rig, action, spec.speed);
     spec.turn_rate = std::clamp(spec.turn_rate, -turn_limit, turn_limit);

@@ -98,17 +98,18 @@ void Synthesizer::plan_travel() {
     turn_[f] = turn;
   }
   const double dt = 1.0 / fps_;
+  const double offset = radians(spec_.direction);  // travel relative to the facing (backing up, sidestepping)
   for (int f = pad_ + 1; f < total_; ++f) {
     heading_[f] = heading_[f - 1] + 0.5 * (turn_[f - 1] + turn_[f]) * dt;
     const double step = 0.5 * (speed_[f - 1] + speed_[f]) * dt;
-    const double mid = 0.5 * (heading_[f - 1] + heading_[f]);
+    const double mid = 0.5 * (heading_[f - 1] + heading_[f]) + offset;
     travelled_[f] = travelled_[f - 1] + step;
     root_[f] = root_[f - 1] + Vec3(std::sin(mid), 0.0, std::cos(mid)) * step;
   }
   for (int f = pad_ - 1; f >= 0; --f) {
     heading_[f] = heading_[f + 1] - 0.5 * (turn_[f + 1] + turn_[f]) * dt;
     const double step = 0.5 * (speed_[f + 1] + speed_[f]) * dt;
-    const double mid = 0.5 * (heading_[f + 1] + heading_[f]);
+    const double mid = 0.5 * (heading_[f + 1] + heading_[f]) + offset;
     travelled_[f] = travelled_[f + 1] - step;
     root_[f] = root_[f + 1] - Vec3(std::sin(mid), 0.0, std::cos(mid)) * step;
   }

@@ -102,6 +102,7 @@ nlohmann::json clip_json(const ZooClip& clip, const Creature& creature) {
       {"speed_body_lengths_per_second", clip.spec.speed},
       {"typical_speed_body_lengths_per_second", typical_speed(creature, clip.spec.action)},
       {"turn_rate_degrees_per_second", clip.spec.turn_rate},
+      {"direction_degrees", clip.spec.direction},
       {"heading_change_degrees", heading_change_degrees(clip.spec)},
       {"start_from_still", clip.spec.start_from_still},
       {"stop_at_end", clip.spec.stop_at_end},
@@ -181,6 +182,10 @@ MotionSpec zoo_clip_spec(const Creature& creature, const ZooOptions& options, in
     const bool airborne = spec.action == Action::Fly || spec.action == Action::Glide;
     spec.start_from_still = !airborne && random.chance(0.35);
     spec.stop_at_end = !airborne && random.chance(0.3);
+    if (spec.action == Action::Walk && random.chance(0.3)) {
+      const double directions[] = {180.0, 90.0, -90.0};  // backs up, sidesteps left, sidesteps right
+      spec.direction = directions[random.below(3)];
+    }
   }
   if (spec.action == Action::Attack || spec.action == Action::Point || spec.action == Action::Kick) {
     spec.side = random.chance(0.5) ? Side::Left : Side::Right;

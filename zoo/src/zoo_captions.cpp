@@ -60,6 +60,17 @@ bool is_arthropod(BodyPlan plan) {
 }
 bool is_four_legged(BodyPlan plan) { return plan == BodyPlan::Quadruped || plan == BodyPlan::Dragon; }
 
+// Where a walk goes relative to the creature's facing (MotionSpec::direction).
+enum class Heading { Forward, Backward, Left, Right };
+
+Heading travel_heading(const MotionSpec& spec) {
+  const double d = spec.direction;
+  if (std::abs(d) > 135.0) return Heading::Backward;
+  if (d > 45.0) return Heading::Left;
+  if (d < -45.0) return Heading::Right;
+  return Heading::Forward;
+}
+
 // ---- verbs -----------------------------------------------------------------
 
 std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec, SpeedClass speed) {
@@ -69,6 +80,18 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
   std::vector<Verb> verbs;
   switch (spec.action) {
     case Action::Walk:
+      if (travel_heading(spec) == Heading::Backward) {
+        verbs = {{"walks", "walking"}, {"backs up", "backing up"}, {"steps back", "stepping back"},
+                 {"backs away", "backing away"}};
+        break;
+      }
+      if (travel_heading(spec) != Heading::Forward) {
+        const std::string d = travel_heading(spec) == Heading::Left ? "left" : "right";
+        verbs = {{"walks", "walking"}, {"sidesteps", "sidestepping"}, {"steps sideways to the " + d,
+                 "stepping sideways to the " + d}, {"shuffles sideways to the " + d, "shuffling sideways to the " + d}};
+        if (is_arthropod(plan)) verbs.push_back({"scuttles sideways to the " + d, "scuttling sideways to the " + d});
+        break;
+      }
       verbs = {{"walks", "walking"}};
       if (is_arthropod(plan)) {
         verbs.push_back({"crawls", "crawling"});
@@ -246,8 +269,14 @@ std::string turn_participle(const MotionSpec& spec, Phraser& phraser, bool long_
   return "";
 }
 
-// Where a travelling clip goes: "forward" or, without turning, "straight ahead".
+// Where a travelling clip goes: "forward" or, without turning, "straight ahead"; "backward", "to the left".
 std::string direction_words(const MotionSpec& spec, Phraser& phraser) {
+  switch (travel_heading(spec)) {
+    case Heading::Backward: return phraser.pick<std::string>({"backward", "backwards", "in reverse"});
+    case Heading::Left: return phraser.pick<std::string>({"to the left", "sideways to the left", "leftward"});
+    case Heading::Right: return phraser.pick<std::string>({"to the right", "sideways to the right", "rightward"});
+    case Heading::Forward: break;
+  }
   if (spec.action == Action::Slither) return phraser.pick<std::string>({"forward", "along the ground", "ahead"});
   if (spec.action == Action::Fly || spec.action == Action::Glide) return phraser.pick<std::string>({"forward", "ahead", "through the air"});
   if (classify_turn(spec) == TurnClass::Straight) return phraser.pick<std::string>({"forward", "ahead", "straight ahead"});

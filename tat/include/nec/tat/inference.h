@@ -46,8 +46,9 @@ owo::OwoOutput encode_skeletons(owo::OwoEncoderImpl& encoder, const std::vector<
 // embed_skeletons for trainers whose OwO encoder is frozen: every step embeds
 // its batch's skeletons, and the corpus's own rigs come back step after step
 // (the OwO was up to a quarter of an evaluator step). The rigs of the train
-// and val clips of a cache are embedded once, 64 at a time in the cache's
-// order, and kept (as many as max_bytes holds); other rigs (those a batch
+// and val clips of a cache are embedded once, smallest first in chunks of
+// bounded items × joints², and kept (as many as max_bytes holds: the largest
+// rigs are the ones left out); other rigs (those a batch
 // augmented) are embedded as they come. Kept once, before the first step, a
 // rig reads the same at every step and in a resumed run. The numbers differ
 // from embedding a batch afresh by float rounding (products of other shapes).

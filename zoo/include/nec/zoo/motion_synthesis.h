@@ -98,6 +98,8 @@ struct MotionSpec {
   Action action = Action::Walk;
   double speed = 0.5;             // body lengths per second along the heading, e.g. 0.8; locomotion, Jump (0 = in place), TakeOff
   double turn_rate = 0.0;         // degrees per second, + = left (counter-clockwise seen from +Y); locomotion only
+  double direction = 0.0;         // Walk: degrees of travel from the facing, + = left: 180 backs up, 90 / -90
+                                  // sidestep to the left / right (then straight, at most 0.8 x the typical speed)
   bool start_from_still = false;  // locomotion: stands still first, then accelerates
   bool stop_at_end = false;       // locomotion: decelerates and stands still at the end
   double seconds = 4.0;           // clip length, e.g. 4
