@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -264,6 +265,33 @@ TEST_F(ZooCaptions, BackingUpAndSidesteppingSayWhichWay) {
           EXPECT_FALSE(has_any(mid, {direction > 0 ? "right" : "left"})) << mid;
         }
         EXPECT_FALSE(has_any(mid, {"forward", "ahead"})) << mid;
+      }
+    }
+  }
+}
+
+TEST_F(ZooCaptions, MannersAreNamedAtEveryLevel) {
+  const std::map<Manner, std::vector<std::string>> words = {
+      {Manner::Tired, {"tired", "tiredly", "weary", "wearily", "exhausted", "sluggishly"}},
+      {Manner::Energetic, {"energetic", "energetically", "lively", "spirited", "spring", "energy", "briskly"}},
+      {Manner::Cautious, {"cautious", "cautiously", "wary", "warily", "nervous", "carefully"}},
+      {Manner::Proud, {"proud", "proudly", "confident", "confidently", "haughty", "chest"}}};
+  for (BodyPlan plan : {BodyPlan::Biped, BodyPlan::Quadruped, BodyPlan::Spider}) {
+    const Creature creature = make_creature(plan, 4);
+    for (const auto& [manner, said] : words) {
+      for (Action action : {Action::Walk, Action::Idle}) {
+        MotionSpec spec;
+        spec.action = action;
+        spec.manner = manner;
+        const MotionSpec made = synthesize_motion(creature, spec).spec;
+        for (uint64_t phrasing = 0; phrasing < 6; ++phrasing) {
+          const Captions captions = caption_motion(creature, made, phrasing);
+          for (const std::string& line : captions.lines()) {
+            const bool named = std::any_of(said.begin(), said.end(), [&](const std::string& w) { return has_word(line, w); });
+            EXPECT_TRUE(named) << manner_name(manner) << ": " << line;
+            EXPECT_TRUE(has_word(line, creature.species)) << line;
+          }
+        }
       }
     }
   }

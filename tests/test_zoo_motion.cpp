@@ -495,6 +495,49 @@ TEST(ZooMotion, WalksBackwardAndSidewaysFacingAhead) {
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
+// Manners change the carriage, not the gait: against the same neutral walk, a tired dog and person lower the head
+// (the elevation of the line from the chest to the head, in the sagittal plane), a proud one raises it, a cautious
+// one lowers the body, an energetic one lifts the feet higher.
+TEST(ZooMotion, MannersChangeHowTheBodyIsCarried) {
+  for (BodyPlan plan : {BodyPlan::Biped, BodyPlan::Quadruped}) {
+    const Creature creature = make_creature(plan, 6);
+    const Limb& head_chain = *creature.limbs_of(LimbKind::Head).at(0);
+    const int head = head_chain.joints.back();
+    int chest = creature.skeleton.parents[head_chain.joints.front()];
+    for (const Limb* neck : creature.limbs_of(LimbKind::Neck)) chest = creature.skeleton.parents[neck->joints.front()];
+    struct Carriage {
+      double head = 0.0, root = 0.0, swing_foot = 0.0;
+    };
+    const auto carriage = [&](Manner manner) {
+      MotionSpec spec = spec_for(creature, Action::Walk, 0.8, 0.0, 6);
+      spec.manner = manner;
+      const SynthesizedMotion made = synthesize_motion(creature, spec);
+      EXPECT_EQ(made.spec.manner, manner);
+      const Pose pose = forward_kinematics(creature.skeleton, made.motion);
+      Carriage c;
+      const int frames = made.motion.frame_count;
+      for (int t = 0; t < frames; ++t) {
+        const Vec3 line = pose.position(t, head) - pose.position(t, chest);  // the walk goes along +Z
+        c.head += std::atan2(line.y(), line.z()) / frames;
+        c.root += pose.position(t, 0).y() / frames;
+      }
+      c.swing_foot = foot_stats(creature, made).max_swing_height;
+      return c;
+    };
+    const Carriage neutral = carriage(Manner::Neutral);
+    const double h = creature.leg_length;
+    EXPECT_LT(carriage(Manner::Tired).head, neutral.head - 0.1) << body_plan_name(plan);  // radians
+    EXPECT_GT(carriage(Manner::Proud).head, neutral.head + 0.05) << body_plan_name(plan);
+    EXPECT_LT(carriage(Manner::Cautious).root, neutral.root - 0.05 * h) << body_plan_name(plan);
+    EXPECT_GT(carriage(Manner::Energetic).swing_foot, neutral.swing_foot * 1.15) << body_plan_name(plan);
+  }
+  // Actions that take no manner are made neutral.
+  const Creature person = make_creature(BodyPlan::Biped, 6);
+  MotionSpec wave = spec_for(person, Action::Wave, 1.0, 0.0, 6);
+  wave.manner = Manner::Tired;
+  EXPECT_EQ(synthesize_motion(person, wave).spec.manner, Manner::Neutral);
+}
+
 TEST(ZooMotion, StartsStillAndStopsStill) {
   const Creature creature = make_creature(BodyPlan::Quadruped, 12);
   MotionSpec spec = spec_for(creature, Action::Trot, 1.0, 20.0, 12);

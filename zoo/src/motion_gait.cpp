@@ -104,6 +104,29 @@ std::vector<Action> supported_actions(BodyPlan plan) {
   return {A::Idle};
 }
 
+std::string_view manner_name(Manner manner) {
+  switch (manner) {
+    case Manner::Neutral: return "neutral";
+    case Manner::Tired: return "tired";
+    case Manner::Energetic: return "energetic";
+    case Manner::Cautious: return "cautious";
+    case Manner::Proud: return "proud";
+  }
+  return "neutral";
+}
+
+bool parse_manner(std::string_view name, Manner& manner) {
+  for (Manner m : kAllManners) {
+    if (manner_name(m) == name) {
+      manner = m;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool takes_manner(Action action) { return is_gait(action) || action == Action::Idle; }
+
 bool supports_action(BodyPlan plan, Action action) {
   const std::vector<Action> actions = supported_actions(plan);
   return std::find(actions.begin(), actions.end(), action) != actions.end();

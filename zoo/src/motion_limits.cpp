@@ -129,6 +129,7 @@ MotionSpec effective_spec(const Creature& creature, const Rig& rig, const Motion
       break;
   }
   if (action != Action::Walk) spec.direction = 0.0;
+  if (!takes_manner(action)) spec.manner = Manner::Neutral;
   if (spec.direction != 0.0) {
     // Backing up and sidestepping go straight, at a careful pace.
     spec.turn_rate = 0.0;

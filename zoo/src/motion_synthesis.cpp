@@ -42,6 +42,29 @@ Synthesizer::Synthesizer(const Creature& creature, const Rig& rig, const MotionS
   step_scale_ = style_.uniform(0.85, 1.15);
   tail_scale_ = style_.uniform(0.8, 1.2);
 
+  switch (spec_.manner) {
+    case Manner::Tired:
+      manner_ = {-radians(8.0), -radians(18.0), 0.5, 0.7, 0.04, 0.0};
+      breath_rate_ *= 1.6;
+      look_amount_ *= 0.5;
+      break;
+    case Manner::Energetic:
+      manner_ = {-radians(2.0), radians(5.0), 1.5, 1.35, 0.0, 0.025};
+      breath_rate_ *= 1.3;
+      break;
+    case Manner::Cautious:
+      manner_ = {-radians(10.0), -radians(8.0), 0.6, 0.8, 0.1, 0.0};
+      look_amount_ *= 2.0;
+      break;
+    case Manner::Proud:
+      manner_ = {radians(6.0), radians(12.0), 1.1, 1.1, -0.02, 0.0};
+      look_amount_ *= 0.7;
+      break;
+    case Manner::Neutral:
+      break;
+  }
+  step_scale_ *= manner_.step;
+
   if (is_gait(spec_.action)) {
     const double still = std::min(0.5, 0.12 * spec_.seconds);
     if (spec_.start_from_still) move_begin_ = still;

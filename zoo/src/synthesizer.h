@@ -89,6 +89,17 @@ class Synthesizer {
   double move_begin_ = -kInfinity;  // gait swings may start in [move_begin_, move_end_)
   double move_end_ = kInfinity;
 
+  // What the spec's manner does to the body (MotionSpec::manner), set once from it.
+  struct MannerShape {
+    double trunk_pitch = 0.0;  // radians added to the body's pitch, + = nose up
+    double head_pitch = 0.0;   // radians added to the neck and head, + = up
+    double arm_swing = 1.0;    // scale of the arms' swing in a gait
+    double step = 1.0;         // scale of the step height
+    double lower = 0.0;        // body lowered by this share of the leg reach (negative: raised)
+    double bounce = 0.0;       // vertical bob in a gait, share of the leg reach
+  };
+  MannerShape manner_;
+
   // Style drawn from the seed.
   double breath_rate_ = 0.3, breath_phase_ = 0.0, look_phase_ = 0.0, look_amount_ = 0.3, sway_phase_ = 0.0;
   double step_scale_ = 1.0, tail_scale_ = 1.0;

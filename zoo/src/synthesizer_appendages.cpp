@@ -129,7 +129,8 @@ void Synthesizer::assemble_frame(int f) {
       if (rig_.legs[i].side == arm.limb->side) same_side_phase = gait_.phases[i];
     }
     const bool running = action == Action::Run;
-    double swing = -radians(running ? 35.0 : 18.0) * share * std::cos(2.0 * kPi * (clock + same_side_phase));
+    double swing = -radians(running ? 35.0 : 18.0) * manner_.arm_swing * share *
+                   std::cos(2.0 * kPi * (clock + same_side_phase));
     double elbow = radians(running ? 85.0 : 20.0) * share + radians(10.0) * (1.0 - share);
     double raise = 0.0;  // sideways, away from the body
     if (action == Action::Sit || action == Action::Crouch) {

@@ -256,6 +256,11 @@ void Synthesizer::plan_body() {
       default:
         break;
     }
+    if (takes_manner(spec_.action)) {
+      pitch += manner_.trunk_pitch;
+      y -= manner_.lower * r;
+      y += manner_.bounce * r * std::abs(std::sin(2.0 * kPi * clock)) * share;
+    }
     if (creature_.plan == BodyPlan::Fish) {
       y = std::max(rig_.rest_height, 0.4 * rig_.body_length);
       if (spec_.action == Action::Idle) y += 0.01 * rig_.body_length * breath;

@@ -157,6 +157,8 @@ void Synthesizer::pose_midline(int f, double t) {
         if (action == Action::Fly || action == Action::Glide) pitch = -0.3 * pitch_[f];
         if (action == Action::Sit && creature_.plan != BodyPlan::Biped) pitch = 0.2 * pitch_[f];
         if (action == Action::Bow) pitch = 1.2 * pitch_[f];  // the head goes down with the bow
+        // Targets are global: the manner's head carriage grows along the neck to its full value at the head.
+        pitch += manner_.head_pitch * (kind == LimbKind::Head ? 1.0 : std::min(1.0, (index + 1.0) / neck_count));
         break;
       }
       case LimbKind::Tail: {

@@ -103,6 +103,7 @@ nlohmann::json clip_json(const ZooClip& clip, const Creature& creature) {
       {"typical_speed_body_lengths_per_second", typical_speed(creature, clip.spec.action)},
       {"turn_rate_degrees_per_second", clip.spec.turn_rate},
       {"direction_degrees", clip.spec.direction},
+      {"manner", std::string(manner_name(clip.spec.manner))},
       {"heading_change_degrees", heading_change_degrees(clip.spec)},
       {"start_from_still", clip.spec.start_from_still},
       {"stop_at_end", clip.spec.stop_at_end},
@@ -185,6 +186,15 @@ MotionSpec zoo_clip_spec(const Creature& creature, const ZooOptions& options, in
     if (spec.action == Action::Walk && random.chance(0.3)) {
       const double directions[] = {180.0, 90.0, -90.0};  // backs up, sidesteps left, sidesteps right
       spec.direction = directions[random.below(3)];
+    }
+  }
+  if (takes_manner(spec.action) && random.chance(0.35)) {
+    // A manner, with a pace that suits it.
+    const Manner manners[] = {Manner::Tired, Manner::Energetic, Manner::Cautious, Manner::Proud};
+    spec.manner = manners[random.below(4)];
+    if (is_locomotion(spec.action) && spec.action != Action::Turn) {
+      if (spec.manner == Manner::Tired || spec.manner == Manner::Cautious) spec.speed = typical * random.uniform(0.4, 0.85);
+      if (spec.manner == Manner::Energetic) spec.speed = typical * random.uniform(1.1, 1.8);
     }
   }
   if (spec.action == Action::Attack || spec.action == Action::Point || spec.action == Action::Kick) {

@@ -243,6 +243,47 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
 
 // ---- modifiers -------------------------------------------------------------
 
+// The manner as an adjective of the subject ("a tired dog"), "" when neutral.
+std::string manner_adjective(Manner manner, Phraser& phraser) {
+  switch (manner) {
+    case Manner::Tired: return phraser.pick<std::string>({"tired", "weary", "exhausted"});
+    case Manner::Energetic: return phraser.pick<std::string>({"energetic", "lively", "spirited"});
+    case Manner::Cautious: return phraser.pick<std::string>({"cautious", "wary", "nervous"});
+    case Manner::Proud: return phraser.pick<std::string>({"proud", "confident", "haughty"});
+    case Manner::Neutral: break;
+  }
+  return "";
+}
+
+// The manner as an adverbial after the predicate ("wearily"), "" when neutral; some only of a creature that moves.
+std::string manner_adverbial(Manner manner, bool moves, Phraser& phraser) {
+  switch (manner) {
+    case Manner::Tired:
+      return moves ? phraser.pick<std::string>({"wearily", "tiredly", "sluggishly", "as if exhausted"})
+                   : phraser.pick<std::string>({"wearily", "tiredly", "as if exhausted"});
+    case Manner::Energetic:
+      return moves ? phraser.pick<std::string>({"energetically", "with a spring in its step", "full of energy",
+                                                "briskly"})
+                   : phraser.pick<std::string>({"energetically", "full of energy"});
+    case Manner::Cautious: return phraser.pick<std::string>({"cautiously", "carefully", "warily"});
+    case Manner::Proud: return phraser.pick<std::string>({"proudly", "confidently", "with its chest out"});
+    case Manner::Neutral: break;
+  }
+  return "";
+}
+
+// What the manner does to the body, for the long caption.
+std::string manner_detail(Manner manner, Phraser& phraser) {
+  switch (manner) {
+    case Manner::Tired: return phraser.pick<std::string>({"its head hanging low", "its shoulders slumped"});
+    case Manner::Energetic: return phraser.pick<std::string>({"bouncing with each step", "lifting its feet high"});
+    case Manner::Cautious: return phraser.pick<std::string>({"keeping its body low", "looking around as it goes"});
+    case Manner::Proud: return phraser.pick<std::string>({"its head up", "its chest lifted"});
+    case Manner::Neutral: break;
+  }
+  return "";
+}
+
 std::string speed_words(SpeedClass speed, Phraser& phraser) {
   switch (speed) {
     case SpeedClass::Slow: return phraser.pick<std::string>({"slowly", "at a slow pace", "leisurely", "unhurriedly"});
@@ -607,16 +648,27 @@ Captions caption_motion(const Creature& creature, const MotionSpec& spec, uint64
   const bool travels = is_locomotion(spec.action) && spec.action != Action::Turn;
   const SpeedClass speed = travels ? classify_speed(spec.speed, typical_speed(creature, spec.action)) : SpeedClass::Normal;
   const std::vector<Verb> verbs = action_verbs(creature, spec, speed);
-  const std::string subject = noun_phrase(creature);
+  const std::string plain_subject = noun_phrase(creature);
+  // The manner: an adjective on the subject or an adverbial after the predicate, in every level.
+  const std::string adjective = manner_adjective(spec.manner, phraser);
+  const bool manner_on_subject = !adjective.empty() && phraser.chance(0.5);
+  const std::string subject =
+      manner_on_subject ? (starts_with_vowel_sound(adjective) ? "an " : "a ") + adjective + " " +
+                              plain_subject.substr(plain_subject.find(' ') + 1)
+                        : plain_subject;
+  const std::string adverbial =
+      manner_on_subject ? "" : manner_adverbial(spec.manner, is_locomotion(spec.action), phraser);
 
   // One verb for all three levels: each level adds to the one before.
   const Verb& verb = phraser.pick(verbs);
   Captions captions;
-  // Short: the action only.
-  captions.short_text = phraser.chance(0.7) ? subject + " " + verb.finite : subject + " is " + verb.participle;
+  // Short: the action only (and the manner).
+  captions.short_text = join({phraser.chance(0.7) ? subject + " " + verb.finite : subject + " is " + verb.participle,
+                              adverbial},
+                             " ");
 
   // Mid: + speed, direction and turning (or, for actions that do not travel, one part-level clause).
-  const std::string predicate_text = predicate(creature, spec, verb, speed, phraser);
+  const std::string predicate_text = join({predicate(creature, spec, verb, speed, phraser), adverbial}, ", ");
   const std::string core = subject + " " + predicate_text;
   const std::vector<std::string> details = part_details(creature, spec, phraser);
   const std::string turn = travels ? turn_participle(spec, phraser, true) : "";
@@ -635,6 +687,7 @@ Captions caption_motion(const Creature& creature, const MotionSpec& spec, uint64
     parts = {subject + ", " + posture + ", " + predicate_text};
   }
   for (const std::string& clause : details) parts.push_back(clause);
+  parts.push_back(manner_detail(spec.manner, phraser));
   parts.push_back(turn);
   parts.push_back(stop_clause(spec, phraser));
   captions.long_text = join(parts, ", ");

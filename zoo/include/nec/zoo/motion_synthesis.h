@@ -94,6 +94,20 @@ bool is_gait(Action action);
 std::vector<Action> supported_actions(BodyPlan plan);
 bool supports_action(BodyPlan plan, Action action);
 
+// How a creature carries itself while it moves or stands (locomotion, turning on the spot and idling only).
+enum class Manner {
+  Neutral,
+  Tired,      // head and trunk low, small steps, limp arm swing, heavy breathing
+  Energetic,  // high steps, big arm swing, a bounce in the stride
+  Cautious,   // body lowered, head forward and low, short steps, looking around
+  Proud,      // chest and head up, a fuller stride
+};
+constexpr Manner kAllManners[] = {Manner::Neutral, Manner::Tired, Manner::Energetic, Manner::Cautious, Manner::Proud};
+std::string_view manner_name(Manner manner);  // "neutral", "tired", "energetic", "cautious", "proud"
+bool parse_manner(std::string_view name, Manner& manner);
+// Whether an action takes a manner (the others are made Neutral).
+bool takes_manner(Action action);
+
 struct MotionSpec {
   Action action = Action::Walk;
   double speed = 0.5;             // body lengths per second along the heading, e.g. 0.8; locomotion, Jump (0 = in place), TakeOff
@@ -104,6 +118,7 @@ struct MotionSpec {
   bool stop_at_end = false;       // locomotion: decelerates and stands still at the end
   double seconds = 4.0;           // clip length, e.g. 4
   double fps = 30.0;              // frames per second, e.g. 30
+  Manner manner = Manner::Neutral; // posture and amplitude while moving or standing; see takes_manner
   Side side = Side::None;         // Attack, Point, Kick: striking side (arm, lunge direction, leg); None = chosen
                                   // from seed. Wave, RaiseHands: the hand; None = both
   uint64_t seed = 0;              // small style variations: step height, breathing rate, head motion
