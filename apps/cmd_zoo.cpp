@@ -65,7 +65,9 @@ int run_zoo(int argc, char** argv) {
                   "Write a zoo of procedural creatures with captioned clips: DIR/seen/<creature>/<clip>.bvh +\n"
                   "<clip>.txt (short, mid and long caption, one per line, as `nec prepare` reads them), held-out\n"
                   "plans under DIR/held_out/, and DIR/manifest.json describing every clip. Creature i has plan i\n"
-                  "mod the number of plans; every choice comes from the seed. Body plans and their actions:" +
+                  "mod the number of plans; every choice comes from the seed: speed, turning, walks that back up\n"
+                  "or sidestep, the side of a gesture, and a manner (tired, energetic, cautious, proud) for a third\n"
+                  "of the gaits and idles. Body plans and their actions:" +
                       actions_by_plan());
   cli.option("--out", "DIR", "", "output folder", true);
   cli.option("--creatures", "N", "9", "number of creatures");
