@@ -1,6 +1,8 @@
 // Captions from sidecar text files, CSV tables and Bandai Namco labels.
 #include "nec/corpus/captions.h"
 
+#include "plain_text.h"
+
 #include "nec/motion/clip_file.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
@@ -20,18 +22,8 @@ namespace fs = std::filesystem;
 
 constexpr size_t kMaxTextBytes = size_t{64} << 20;  // captions, tables and label files
 
-std::string_view trim(std::string_view s) {
-  const auto space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
-  while (!s.empty() && space(s.front())) s.remove_prefix(1);
-  while (!s.empty() && space(s.back())) s.remove_suffix(1);
-  return s;
-}
-
-std::string lower(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
+using detail::lower;
+using detail::trim;
 
 std::string_view strip_bom(std::string_view text) {
   if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);

@@ -1,8 +1,9 @@
 // Take descriptions (CMU's free text) -> parts with verb phrases and activity kinds -> clip captions.
 #include "nec/corpus/take_description.h"
 
+#include "plain_text.h"
+
 #include <algorithm>
-#include <cctype>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -57,15 +58,7 @@ const std::map<std::string, std::string>& theme_phrases() {
   return phrases;
 }
 
-std::string lower_trimmed(std::string_view s) {
-  std::string out;
-  for (char c : s) out += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  const auto space = [](unsigned char c) { return std::isspace(c) != 0; };
-  while (!out.empty() && space(out.back())) out.pop_back();
-  size_t first = 0;
-  while (first < out.size() && space(out[first])) ++first;
-  return out.substr(first);
-}
+std::string lower_trimmed(std::string_view s) { return detail::lower(detail::trim(s)); }
 
 std::vector<std::string> split(const std::string& text, char separator) {
   std::vector<std::string> out;
