@@ -52,7 +52,7 @@ std::vector<zoo::Action> parse_action_list(const CommandLine& cli, const std::st
 std::string actions_by_plan() {
   std::string out;
   for (zoo::BodyPlan plan : zoo::kAllBodyPlans) {
-    out += fmt::format("\n  {:<10} ", zoo::body_plan_name(plan));
+    out += fmt::format("\n  {:<12}", zoo::body_plan_name(plan));
     for (zoo::Action action : zoo::supported_actions(plan)) out += " " + std::string(zoo::action_name(action));
   }
   return out;

@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Trains the default models (models/default/) that `nec generate`, `nec transfer`, `nec retrieve` and
 # `nec demo` use when no model is given, on data the project may ship models of: the zoo (every body
-# plan but the hexapod, kept out so the demo can show a plan the models never saw) and Debian's CMU
-# files. Not ../shared/data: its licenses are non-commercial.
+# plan but the hexapod, kept out so the demo and the report can show a plan the models never saw),
+# Debian's CMU files and the free CMU takes of ../shared/data/cmu (with their take descriptions). Never
+# ../shared/data/bandai or mann_dog: their licenses are non-commercial.
 #   scripts/train_default_models.sh [WORK_DIR] [OUT_DIR]     # defaults: out/default-models, models/default
-# About 110 minutes on 2 cores here (the tokenizer and the evaluator, side by side, take 70 of them, the
-# diffusion model's two stages 20). Writes OUT_DIR/{gpt,evaluator,diffusion} (the GPT holds its tokenizer in
-# gpt/tat, which holds its OwO encoder; the diffusion model holds a copy of that encoder) without their
-# training state; OUT_DIR/README.md (kept) says how its numbers were measured.
+# Its training steps took about 110 minutes on 2 cores (the tokenizer and the evaluator, side by side,
+# 70 of them; the diffusion model's two stages 20); the data step under a minute. Writes
+# OUT_DIR/{gpt,evaluator,diffusion} (the GPT holds its tokenizer in gpt/tat, which holds its OwO encoder;
+# the diffusion model holds a copy of that encoder) without their training state; OUT_DIR/README.md
+# (kept) says how its numbers were measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${1:-out/default-models} out=${2:-models/default}
@@ -16,10 +18,19 @@ started=$SECONDS
 step() { echo; echo "== [$(( (SECONDS - started) / 60 )) min] $*"; }
 mkdir -p "$work"
 
-step "data: zoo (hexapods held out) and CMU"
-"$nec" zoo --out "$work/zoo" --creatures 90 --clips-per-creature 8 --seed 11 --hold-out hexapod --quiet
-"$nec" prepare zoo="$work/zoo/seen" zoo_held_out="$work/zoo/held_out" cmu=/usr/share/assimp/models/BVH \
-  --hold-out-dataset zoo_held_out --creature cmu=person -o "$work/cache" --quiet
+shared_cmu=${NEC_SHARED_CMU:-../shared/data/cmu}
+debian_cmu=/usr/share/assimp/models/BVH
+step "data: zoo (hexapods held out), Debian's CMU files and the shared CMU takes"
+[ -f "$shared_cmu/descriptions.csv" ] || { echo "no $shared_cmu/descriptions.csv (set NEC_SHARED_CMU)" >&2; exit 1; }
+"$nec" zoo --out "$work/zoo" --creatures 225 --clips-per-creature 10 --seed 11 --hold-out hexapod --quiet
+# Debian's takes that the shared set holds too (01_01, another conversion) are left out: one take, one split.
+rm -rf "$work/cmu_debian" && mkdir -p "$work/cmu_debian"
+for take in "$debian_cmu"/*.bvh; do
+  [ -e "$shared_cmu/bvh/$(basename "$take")" ] || ln -s "$take" "$work/cmu_debian/"
+done
+"$nec" prepare zoo="$work/zoo/seen" zoo_held_out="$work/zoo/held_out" cmu="$work/cmu_debian" \
+  cmu_free="$shared_cmu/bvh" --descriptions "$shared_cmu/descriptions.csv" \
+  --hold-out-dataset zoo_held_out --creature cmu=person,cmu_free=person -o "$work/cache" --quiet
 
 step "skeleton encoder"
 "$nec" train owo --config configs/owo_default.json --data "$work/cache" --out "$work/owo" --threads 2 --force

@@ -53,7 +53,7 @@ TEST_F(Zoo, WritesClipsSidecarsAndManifest) {
     const fs::path txt = fs::path(options.out_dir) / clip.captions_file;
     ASSERT_TRUE(fs::exists(bvh)) << bvh;
     EXPECT_EQ(txt.stem(), bvh.stem());
-    EXPECT_EQ(clip.plan, kAllBodyPlans[clip.creature_index % 9]) << "creature i has plan i mod 9";
+    EXPECT_EQ(clip.plan, kAllBodyPlans[clip.creature_index % std::size(kAllBodyPlans)]) << "creature i has plan i mod the plan count";
     const bool held = clip.plan == BodyPlan::Spider || clip.plan == BodyPlan::Dragon;
     EXPECT_EQ(clip.held_out, held);
     EXPECT_EQ(clip.bvh_file.rfind(held ? "held_out/" : "seen/", 0), 0u) << clip.bvh_file;

@@ -297,6 +297,42 @@ TEST_F(ZooCaptions, MannersAreNamedAtEveryLevel) {
   }
 }
 
+// The plans modelled on users' rigs are worded as what they are: a kangaroo hops (never walks), a crab's attack
+// is its claws', an elephant trumpets with its trunk, a dinosaur bites (it does not peck); species by name.
+TEST_F(ZooCaptions, NewPlansAreWordedAsWhatTheyAre) {
+  for (const Case& c : *cases_) {
+    const BodyPlan plan = c.creature.plan;
+    if (moves_like(plan) == plan) continue;
+    for (uint64_t phrasing = 0; phrasing < 4; ++phrasing) {
+      const Captions captions = caption_motion(c.creature, c.spec, phrasing);
+      const std::string& mid = captions.mid_text;
+      EXPECT_TRUE(has_word(mid, c.creature.species)) << mid;
+      if (plan == BodyPlan::Hopper && (c.spec.action == Action::Walk || c.spec.action == Action::Run)) {
+        EXPECT_TRUE(has_any(mid, {"hop", "bound"})) << mid;
+        EXPECT_FALSE(has_any(mid, {"walk", "runs", "running"})) << mid;
+      }
+      if (c.spec.action == Action::Attack) {
+        if (plan == BodyPlan::Crab) {
+          EXPECT_TRUE(has_word(mid, "claws")) << mid;
+        } else if (plan == BodyPlan::Elephant) {
+          EXPECT_TRUE(has_any(mid, {"trunk", "trumpet"})) << mid;
+        } else if (plan == BodyPlan::Dinosaur) {
+          EXPECT_FALSE(has_any(mid, {"peck"})) << mid;
+        } else if (plan == BodyPlan::GroundBird) {
+          EXPECT_TRUE(has_any(mid, {"peck"})) << mid;
+        }
+      }
+    }
+  }
+  std::set<std::string> species;
+  for (BodyPlan plan : {BodyPlan::Crab, BodyPlan::Ungulate, BodyPlan::Elephant, BodyPlan::GroundBird,
+                        BodyPlan::Hopper, BodyPlan::Dinosaur}) {
+    for (uint64_t seed = 0; seed < 30; ++seed) species.insert(make_creature(plan, seed).species);
+  }
+  EXPECT_EQ(species, (std::set<std::string>{"crab", "deer", "goat", "camel", "giraffe", "elephant", "flamingo", "heron",
+                                            "chicken", "ostrich", "kangaroo", "wallaby", "dinosaur", "tyrannosaurus"}));
+}
+
 TEST(ZooCaptionsBasics, ManyPhrasingsAndDeterministic) {
   const Creature spider = make_creature(BodyPlan::Spider, 7);
   MotionSpec spec;

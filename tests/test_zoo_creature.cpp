@@ -20,8 +20,9 @@ constexpr int kSeeds = 50;
 
 std::string plan_name(BodyPlan plan) { return std::string(body_plan_name(plan)); }
 
-constexpr NamingStyle kAllStyles[] = {NamingStyle::Mixamo, NamingStyle::Blender, NamingStyle::Game,
-                                      NamingStyle::Biped3ds, NamingStyle::Numbered};
+constexpr NamingStyle kAllStyles[] = {NamingStyle::Mixamo,   NamingStyle::Blender, NamingStyle::Game,
+                                      NamingStyle::Biped3ds, NamingStyle::Maya,    NamingStyle::Truebones,
+                                      NamingStyle::Numbered};
 constexpr RestPose kAllPoses[] = {RestPose::TPose, RestPose::APose, RestPose::Crouched};
 
 // Rest positions by forward kinematics: joints (J) and end sites (E).
@@ -295,7 +296,7 @@ TEST(ZooCreature, FeetStandUnderTheBody) {
         const std::string where = plan_name(plan) + " pose " + std::to_string(static_cast<int>(pose)) + " seed " +
                                   std::to_string(seed) + ": feet " + std::to_string(ahead) + " diameters ahead";
         EXPECT_NEAR(centroid.x(), root.x(), 1e-9 * size) << where;
-        switch (plan) {
+        switch (moves_like(plan)) {  // an ungulate stands as a quadruped, a crab as a spider, ...
           case BodyPlan::Biped:
             // Straight legs put the ankle under the hip and the tip (the ball
             // of a flat foot) a foot length ahead; a crouch stands on it.
@@ -403,8 +404,8 @@ TEST(ZooCreature, LeftAndRightMirrorExactly) {
 bool names_its_kind(LimbKind kind, const std::string& canonical) {
   auto has = [&](const char* word) { return canonical.find(word) != std::string::npos; };
   switch (kind) {
-    case LimbKind::Leg: return has("leg") || has("foot") || has("toe") || has("coxa") || has("shoulder");
-    case LimbKind::Arm: return has("arm") || has("hand") || has("shoulder");
+    case LimbKind::Leg: return has("leg") || has("foot") || has("toe") || has("coxa") || has("shoulder") || has("hoof");
+    case LimbKind::Arm: return has("arm") || has("hand") || has("shoulder") || has("claw");
     case LimbKind::Wing: return has("wing");
     case LimbKind::Fin: return has("fin");
     case LimbKind::Tail: return has("tail") || has("spine");
@@ -413,6 +414,7 @@ bool names_its_kind(LimbKind kind, const std::string& canonical) {
     case LimbKind::Spine: return has("spine");
     case LimbKind::Antenna: return has("antenna") || has("palp");
     case LimbKind::Jaw: return has("jaw") || has("mandible") || has("fang");
+    case LimbKind::Trunk: return has("trunk");
   }
   return false;
 }
@@ -420,19 +422,25 @@ bool names_its_kind(LimbKind kind, const std::string& canonical) {
 TEST(ZooCreature, CanonicalNamesCarryMeaningAndSide) {
   for (BodyPlan plan : kAllBodyPlans) {
     for (uint64_t seed = 0; seed < 8; ++seed) {
-      for (NamingStyle style : {NamingStyle::Mixamo, NamingStyle::Blender, NamingStyle::Game, NamingStyle::Biped3ds}) {
+      for (NamingStyle style : {NamingStyle::Mixamo, NamingStyle::Blender, NamingStyle::Game, NamingStyle::Biped3ds,
+                                NamingStyle::Maya, NamingStyle::Truebones}) {
         CreatureOptions options = sample_creature_options(plan, seed);
         options.naming = style;
         const Creature c = make_creature(plan, seed, options);
         const Skeleton& s = c.skeleton;
         std::vector<Side> limb_side(static_cast<size_t>(s.joint_count()), Side::None);
+        std::vector<bool> in_limb(static_cast<size_t>(s.joint_count()), false);
         for (const Limb& limb : c.limbs) {
           for (int j : limb.joints) {
             limb_side[j] = limb.side;
+            in_limb[j] = true;
             const std::string canonical = canonical_joint_name(s.names[j]);
             EXPECT_TRUE(names_its_kind(limb.kind, canonical))
                 << plan_name(plan) << " " << limb_kind_name(limb.kind) << ": '" << s.names[j] << "' -> '" << canonical << "'";
           }
+        }
+        for (int j = 1; j < s.joint_count(); ++j) {  // joints off the chains (a bird's side toes): their parent's side
+          if (!in_limb[j]) limb_side[j] = limb_side[s.parents[j]];
         }
         for (int j = 0; j < s.joint_count(); ++j) {
           const std::string canonical = canonical_joint_name(s.names[j]);

@@ -6,10 +6,12 @@
 #include "nec/motion/kinematics.h"
 #include "nec/corpus/preprocess.h"
 #include "nec/zoo/motion_synthesis.h"
+#include "nec/zoo/zoo.h"
 #include "test_support.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <random>
@@ -493,6 +495,109 @@ TEST(ZooMotion, WalksBackwardAndSidewaysFacingAhead) {
   MotionSpec bad;
   bad.direction = 200.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// ---- the plans modelled on users' rigs ---------------------------------------
+
+// A kangaroo hops: both feet leave and land together, and the body flies between hops.
+TEST(ZooMotion, HopperHopsWithBothFeetTogether) {
+  const Creature creature = make_creature(BodyPlan::Hopper, 3);
+  for (Action action : {Action::Walk, Action::Run}) {
+    const SynthesizedMotion made = synthesize_motion(creature, spec_for(creature, action, 1.0, 0.0, 3));
+    ASSERT_EQ(made.legs.size(), 2u);
+    EXPECT_EQ(made.legs[0].stance, made.legs[1].stance) << action_name(action);
+    const std::vector<std::vector<double>> heights = foot_heights(creature, made);
+    EXPECT_GT(correlation(heights[0], heights[1]), 0.95) << action_name(action);
+    const Motion& m = made.motion;
+    int airborne = 0;
+    double low = m.translation(0, 0).y(), high = low;
+    for (int t = 0; t < m.frame_count; ++t) {
+      airborne += !made.legs[0].stance[t];
+      low = std::min(low, m.translation(t, 0).y());
+      high = std::max(high, m.translation(t, 0).y());
+    }
+    EXPECT_GT(airborne, m.frame_count / 3) << action_name(action) << ": a hop is mostly flight";
+    EXPECT_GT(high - low, 0.1 * creature.leg_length) << action_name(action) << ": the body rises between hops";
+  }
+}
+
+// Feeding: the muzzle (the head's or jaw's end site) goes down to the ground by the forefeet and comes up again,
+// for long necks (giraffes, horses) and short ones (bears, dogs: the body tips forward), the feet planted.
+TEST(ZooMotion, EatingBringsTheMuzzleToTheGround) {
+  for (BodyPlan plan : {BodyPlan::Quadruped, BodyPlan::Ungulate, BodyPlan::Dragon}) {
+    for (uint64_t seed = 0; seed < 6; ++seed) {
+      const Creature creature = make_creature(plan, seed);
+      const int head = creature.limbs_of(LimbKind::Head).at(0)->joints.back();
+      // The muzzle: the end site of the head, or of its jaw.
+      const Skeleton& s = creature.skeleton;
+      const auto muzzle_site = std::find_if(s.end_sites.begin(), s.end_sites.end(), [&](const EndSite& site) {
+        return site.parent == head || s.parents[site.parent] == head;
+      });
+      ASSERT_NE(muzzle_site, s.end_sites.end());
+      const SynthesizedMotion made = synthesize_motion(creature, spec_for(creature, Action::Eat, 1.0, 0.0, seed));
+      const Pose pose = forward_kinematics(s, made.motion);
+      const auto muzzle = [&](int t) {
+        return Vec3(pose.position(t, muzzle_site->parent) + pose.rotation(t, muzzle_site->parent) * muzzle_site->offset);
+      };
+      const int last = made.motion.frame_count - 1;
+      const int grazing = made.motion.frame_count / 2;
+      const std::string what = creature.species + " seed " + std::to_string(seed);
+      EXPECT_LT(muzzle(grazing).y(), 0.12 * creature.leg_length) << what << ": standing " << muzzle(0).y();
+      EXPECT_GT(muzzle(grazing).y(), -0.02 * creature.leg_length) << what << ": not through the ground";
+      EXPECT_GT(muzzle(0).y(), 3.0 * muzzle(grazing).y()) << what;
+      EXPECT_GT(muzzle(last).y(), 0.7 * muzzle(0).y()) << what << ": the head comes up again";
+      const double forefeet = pose.position(grazing, creature.limbs_of(LimbKind::Leg).at(0)->joints.back()).z();
+      const Vec3 root = made.motion.translation(grazing, 0);
+      EXPECT_GT(muzzle(grazing).z() - root.z(), forefeet - root.z() - 0.1 * creature.leg_length)
+          << what << ": at or ahead of the forefeet";
+      const FootStats stats = foot_stats(creature, made);
+      EXPECT_LT(stats.max_slip, kSlipTolerance * creature.leg_length) << what;
+      EXPECT_EQ(stats.swing_frames, 0) << what << ": it feeds standing";
+    }
+  }
+}
+
+// Height of a joint over a clip: its first frame and its highest.
+std::pair<double, double> first_and_highest(const Creature& creature, const SynthesizedMotion& made, int joint) {
+  const Pose pose = forward_kinematics(creature.skeleton, made.motion);
+  double highest = pose.position(0, joint).y();
+  for (int t = 0; t < made.motion.frame_count; ++t) highest = std::max(highest, pose.position(t, joint).y());
+  return {pose.position(0, joint).y(), highest};
+}
+
+// A crab threatens with its claws raised; an elephant curls its trunk up over its head; a crab walks or runs
+// sideways in most of the zoo's walks and runs.
+TEST(ZooMotion, CrabRaisesItsClawsAndElephantItsTrunkInAnAttack) {
+  for (uint64_t seed : {1, 2, 3}) {
+    const Creature crab = make_creature(BodyPlan::Crab, seed);
+    const SynthesizedMotion pinch = synthesize_motion(crab, spec_for(crab, Action::Attack, 1.0, 0.0, seed));
+    for (const Limb* claw : crab.limbs_of(LimbKind::Arm)) {
+      const auto [first, highest] = first_and_highest(crab, pinch, claw->joints.back());
+      EXPECT_GT(highest - first, 0.15 * crab.leg_length) << "crab " << seed;
+    }
+    const Creature elephant = make_creature(BodyPlan::Elephant, seed);
+    const Limb& trunk = *elephant.limbs_of(LimbKind::Trunk).at(0);
+    const int head = elephant.skeleton.parents[trunk.joints.front()];
+    const SynthesizedMotion trumpet = synthesize_motion(elephant, spec_for(elephant, Action::Attack, 1.0, 0.0, seed));
+    const auto [tip_first, tip_highest] = first_and_highest(elephant, trumpet, trunk.joints.back());
+    const auto [head_first, head_highest] = first_and_highest(elephant, trumpet, head);
+    EXPECT_LT(tip_first, head_first) << "the trunk hangs from the head";
+    EXPECT_GT(tip_highest, head_first) << "then curls up above it";
+  }
+  ZooOptions options;
+  options.plans = {BodyPlan::Crab};
+  int walks = 0, sideways = 0;
+  for (int i = 0; i < 20; ++i) {
+    const Creature crab = make_creature(BodyPlan::Crab, zoo_creature_seed(options, i));
+    for (int k = 0; k < 12; ++k) {
+      const MotionSpec spec = zoo_clip_spec(crab, options, k);
+      if (spec.action != Action::Walk && spec.action != Action::Run) continue;
+      ++walks;
+      sideways += std::abs(std::abs(spec.direction) - 90.0) < 1e-9;
+    }
+  }
+  ASSERT_GT(walks, 10);
+  EXPECT_GT(sideways, walks / 2);
 }
 
 // Manners change the carriage, not the gait: against the same neutral walk, a tired dog and person lower the head

@@ -1,5 +1,5 @@
-// Arthropod body plans: hexapods (ants, beetles), spiders and centipedes,
-// whose legs of 3 to 5 joints lean out and splay to reach the ground.
+// Arthropod body plans: hexapods (ants, beetles), spiders, centipedes and
+// crabs, whose legs of 3 to 5 joints lean out and splay to reach the ground.
 #include "body_plans.h"
 
 #include <algorithm>
@@ -39,6 +39,18 @@ LegShape arthropod_leg(int joint_count, double length, const Vec3& out, RestPose
   shape.end_direction = out;
   shape.end_length = claw * length;
   return shape;
+}
+
+// A thorax root standing on `first` (its hips `hip_drop` below the root) and a head at `head` from it (both
+// relative to the root), its end site `head_tip` further; returns the head joint.
+int add_thorax_and_head(Body& body, const LegShape& first, double hip_drop, const Vec3& head, const Vec3& head_tip) {
+  const Vec3 root_position(0.0, hip_drop + leg_drop(first.bones), 0.0);
+  body.add(spec(Part::Thorax), -1, root_position);
+  const int head_joint = body.add(spec(Part::Head), 0, root_position + head);
+  body.head_tip = root_position + head + head_tip;
+  body.end(head_joint, body.head_tip);
+  body.limb(LimbKind::Head, Side::None, 0, {head_joint});
+  return head_joint;
 }
 
 // Straight-leg lean (degrees from down) of arthropod legs in the T- and A-pose.
@@ -123,15 +135,11 @@ void build_spider(Body& body, SplitMix64& rng, RestPose pose) {
 
   const double hip_drop = 0.01 * length;
   const LegShape first = arthropod_leg(leg_joints, leg, horizontal(yaw[0]), pose, kSpiderLean, 1, 0.15);
-  const Vec3 root_position(0.0, hip_drop + leg_drop(first.bones), 0.0);
-  body.add(spec(Part::Thorax), -1, root_position);
+  const int head_joint =
+      add_thorax_and_head(body, first, hip_drop, Vec3(0.0, 0.03, 0.18) * length, Vec3(0.0, 0.0, 0.1) * length);
+  const Vec3 root_position = body.at(0);
+  const Vec3 head_position = body.at(head_joint);
   const double floor = 0.1 * root_position.y();
-
-  const Vec3 head_position = root_position + Vec3(0.0, 0.03, 0.18) * length;
-  const int head_joint = body.add(spec(Part::Head), 0, head_position);
-  body.head_tip = head_position + Vec3(0.0, 0.0, 0.1) * length;
-  body.end(head_joint, body.head_tip);
-  body.limb(LimbKind::Head, Side::None, 0, {head_joint});
   if (palps) {  // short leg-like feelers in front
     std::vector<Vec3> points = walk(head_position + Vec3(0.03, -0.01, 0.08) * length,
                                     {elevated(horizontal(25.0), -20.0) * (0.12 * length),
@@ -225,6 +233,58 @@ void build_centipede(Body& body, SplitMix64& rng, RestPose pose) {
                                          kCentipedeLean, pair + 1, 0.25);
     const Vec3 hip = body.at(trunk[pair]) + Vec3(0.35 * segment, -hip_drop, 0.0);
     body.paired_limb(LimbKind::Leg, pair, add_leg(body, trunk[pair], hip, shape, pair == 0 ? LegFit::Scale : LegFit::Splay));
+  }
+}
+
+void build_crab(Body& body, SplitMix64& rng, RestPose pose) {
+  body.species = "crab";
+  const double width = rng.uniform(0.04, 0.4);  // across the shell
+  const int leg_joints = rng.integer(4, 5);
+  const bool eyes = rng.chance(0.7);
+  const bool pincer = rng.chance(0.7);  // the claw's moving finger as a joint of its own
+  const double leg = width * rng.uniform(0.9, 1.4);
+  const double claw = width * rng.uniform(0.6, 1.0);  // claw arm length
+  std::array<double, 4> yaw{60.0, 82.0, 104.0, 126.0};  // legs out to the sides, the last ones swept back
+  for (double& y : yaw) y += rng.uniform(-5.0, 5.0);
+
+  const double hip_drop = 0.02 * width;
+  const LegShape first = arthropod_leg(leg_joints, leg, horizontal(yaw[0]), pose, kSpiderLean, 1, 0.1);
+  const int head_joint =
+      add_thorax_and_head(body, first, hip_drop, Vec3(0.0, 0.02, 0.3) * width, Vec3(0.0, 0.0, 0.06) * width);
+  const Vec3 root_position = body.at(0);
+  const Vec3 head_position = body.at(head_joint);
+  const double floor = 0.1 * root_position.y();
+  if (eyes) {  // eye stalks, up and a little out
+    const Vec3 base = head_position + Vec3(0.08, 0.03, 0.0) * width;
+    body.paired_limb(LimbKind::Antenna, 0,
+                     body.add_chain(head_joint, chain_specs(Part::Antenna, 1, Side::Left),
+                                    {base, base + Vec3(0.03, 0.12, 0.02) * width}));
+  }
+  // The abdomen folded under the shell, at the back.
+  body.tail_tip = root_position + Vec3(0.0, -0.08, -0.3) * width;
+  body.limb(LimbKind::Tail, Side::None, 0,
+            body.add_chain(0, chain_specs(Part::Abdomen, 1), {root_position + Vec3(0.0, -0.04, -0.15) * width, body.tail_tip}));
+
+  // Claws from the front corners: out and forward, the forearm turned in, the pincer ahead.
+  const Vec3 claw_base = root_position + Vec3(0.22, 0.0, 0.22) * width;
+  std::vector<Vec3> claw_points = walk(claw_base, {Vec3(0.7, -0.2, 0.6).normalized() * (0.35 * claw),
+                                                   Vec3(-0.2, 0.05, 1.0).normalized() * (0.3 * claw),
+                                                   Vec3(-0.1, 0.0, 1.0).normalized() * (0.35 * claw)});
+  std::vector<JointSpec> claw_specs = {spec(Part::UpperArm, Side::Left), spec(Part::ForeArm, Side::Left),
+                                       spec(Part::Hand, Side::Left)};
+  if (pincer) {  // the moving finger from the palm's middle, beside the fixed one
+    claw_specs.push_back(spec(Part::Claw, Side::Left));
+    claw_points.insert(claw_points.end() - 1, claw_points[2] + 0.45 * (claw_points[3] - claw_points[2]));
+  }
+  keep_above(claw_points, floor);
+  body.paired_limb(LimbKind::Arm, 0, body.add_chain(0, claw_specs, claw_points));
+
+  const std::array<double, 4> attach_z{0.12, 0.04, -0.04, -0.12};
+  for (int pair = 0; pair < 4; ++pair) {
+    const LegShape shape = arthropod_leg(leg_joints, leg * (pair == 3 ? 0.85 : 1.0), horizontal(yaw[pair]), pose,
+                                         kSpiderLean, pair + 1, 0.1);
+    const Vec3 hip = root_position + Vec3(0.3, 0.0, attach_z[pair]) * width - Vec3::UnitY() * hip_drop;
+    body.paired_limb(LimbKind::Leg, pair, add_leg(body, 0, hip, shape, pair == 0 ? LegFit::Scale : LegFit::Splay));
   }
 }
 

@@ -1,9 +1,12 @@
 // Two-legged body plans: the person (spine, neck, head, arms; crouched: knees
-// bent with the feet under the hips) and the bird (body tilted up, S-shaped
-// neck, tail, wings spread, drooping or folded).
+// bent with the feet under the hips) and the birds (body tilted up, S-shaped
+// neck, tail, wings spread, drooping or folded): any bird, and the ground birds
+// (flamingo, heron, chicken, ostrich) with their own proportions and three toes.
 #include "body_plans.h"
 
 #include <cmath>
+#include <iterator>
+#include <utility>
 
 namespace nec::zoo::detail {
 
@@ -95,20 +98,41 @@ void build_biped(Body& body, SplitMix64& rng, RestPose pose) {
   body.paired_limb(LimbKind::Arm, 0, arm);
 }
 
-void build_bird(Body& body, SplitMix64& rng, RestPose pose) {
-  body.species = "bird";
+namespace {
+
+// Proportions of a bird species, relative to its leg length (the body's to the body length).
+struct BirdSpecies {
+  const char* name;
+  double leg_min, leg_max;    // hip to foot, meters
+  double body_min, body_max;  // hips to chest
+  double neck_min, neck_max;
+  double wing_min, wing_max;  // wing root to tip / body length
+  double body_degrees;        // body elevation from the hips, standing
+  bool side_toes;             // inner and outer toes beside the middle one (the leg's chain)
+};
+
+const BirdSpecies kBird{"bird", 0.12, 0.9, 0.8, 1.3, 0.4, 1.3, 1.2, 2.5, 25.0, false};
+const BirdSpecies kGroundBirds[] = {
+    {"flamingo", 0.9, 1.2, 0.45, 0.6, 0.9, 1.2, 1.8, 2.4, 10.0, true},
+    {"heron", 0.6, 0.9, 0.55, 0.7, 0.8, 1.1, 2.0, 2.6, 20.0, true},
+    {"chicken", 0.15, 0.25, 1.2, 1.6, 0.5, 0.8, 0.9, 1.3, 20.0, true},
+    {"ostrich", 1.0, 1.3, 0.7, 0.9, 0.9, 1.2, 0.7, 1.0, 10.0, true},
+};
+
+void build_bird_of(Body& body, SplitMix64& rng, RestPose pose, const BirdSpecies& species) {
+  body.species = species.name;
   const bool crouched = pose == RestPose::Crouched;
-  const double leg = rng.uniform(0.12, 0.9);
+  const double leg = rng.uniform(species.leg_min, species.leg_max);
   const int spine_count = rng.integer(1, 3);
   const int neck_count = rng.integer(3, 8);
   const int tail_count = rng.integer(1, 3);
   const bool jaw = rng.chance(0.4);
   const bool wing_finger = rng.chance(0.4);
-  const double body_length = leg * rng.uniform(0.8, 1.3);
-  const double neck = leg * rng.uniform(0.4, 1.3);
+  const double body_length = leg * rng.uniform(species.body_min, species.body_max);
+  const double neck = leg * rng.uniform(species.neck_min, species.neck_max);
   const double head = leg * rng.uniform(0.25, 0.4);
   const double tail = body_length * rng.uniform(0.4, 0.8);
-  const double wing = body_length * rng.uniform(1.2, 2.5);
+  const double wing = body_length * rng.uniform(species.wing_min, species.wing_max);
   const double hip_width = leg * rng.uniform(0.08, 0.12);
   const double hip_drop = 0.05 * leg;
 
@@ -126,7 +150,7 @@ void build_bird(Body& body, SplitMix64& rng, RestPose pose) {
   body.add(spec(Part::Hips), -1, root_position);
 
   // Body tilted up towards the chest; an S-shaped neck; the beak forward.
-  const Vec3 body_direction = elevated(Vec3::UnitZ(), crouched ? 10.0 : 25.0);
+  const Vec3 body_direction = elevated(Vec3::UnitZ(), crouched ? 10.0 : species.body_degrees);
   std::vector<Vec3> spine_points;
   for (int k = 1; k <= spine_count; ++k)
     spine_points.push_back(root_position + body_direction * (body_length * k / spine_count));
@@ -169,10 +193,33 @@ void build_bird(Body& body, SplitMix64& rng, RestPose pose) {
   }
   const std::vector<int> wings = add_wing(body, chest, wing_root, directions, lengths, parts, wing, 0.1 * root_height);
 
-  body.paired_limb(
-      LimbKind::Leg, 0,
-      add_leg(body, 0, root_position + Vec3(hip_width, -hip_drop, hip_ahead), legs, LegFit::Scale));
+  const std::vector<int> leg_joints =
+      add_leg(body, 0, root_position + Vec3(hip_width, -hip_drop, hip_ahead), legs, LegFit::Scale);
+  if (species.side_toes) {  // inner and outer toes fanning out from the foot, mirrored with the leg
+    const int foot = leg_joints[leg_joints.size() - 2];
+    const double toe = legs.end_length;
+    std::vector<int> left = leg_joints;
+    for (const auto& [qualifier, yaw] : {std::pair{"inner", -35.0}, std::pair{"outer", 35.0}}) {
+      const Vec3 start = body.at(leg_joints.back());  // the ball of the foot, on the ground
+      const int joint = body.add(spec(Part::Toe, Side::Left, qualifier), foot, start);
+      body.end(joint, start + horizontal(yaw) * (0.8 * toe));
+      left.push_back(joint);
+    }
+    const std::vector<int> right = body.mirror(left);
+    body.limb(LimbKind::Leg, Side::Left, 0, leg_joints);
+    body.limb(LimbKind::Leg, Side::Right, 0, std::vector<int>(right.begin(), right.begin() + leg_joints.size()));
+  } else {
+    body.paired_limb(LimbKind::Leg, 0, leg_joints);
+  }
   body.paired_limb(LimbKind::Wing, 0, wings);
+}
+
+}  // namespace
+
+void build_bird(Body& body, SplitMix64& rng, RestPose pose) { build_bird_of(body, rng, pose, kBird); }
+
+void build_ground_bird(Body& body, SplitMix64& rng, RestPose pose) {
+  build_bird_of(body, rng, pose, kGroundBirds[rng.integer(0, static_cast<int>(std::size(kGroundBirds)) - 1)]);
 }
 
 }  // namespace nec::zoo::detail

@@ -1,6 +1,7 @@
 // Four-legged body plans: quadrupeds of five species (dog, cat, horse, wolf,
-// bear) and dragons, the same four-legged body with wings and a longer neck
-// and tail.
+// bear); ungulates (deer, goat, camel, giraffe) on hooves; elephants, with
+// pillar legs and a trunk; and dragons, the same four-legged body with wings
+// and a longer neck and tail.
 #include "body_plans.h"
 
 #include <algorithm>
@@ -36,11 +37,21 @@ const QuadrupedSpecies kQuadrupeds[] = {
     {"bear", 0.70, 1.00, 1.20, 0.05, 0.35, 20, 1, 3, 0.35, -10, 0.12, 1, 2, -30, 0, 70},
 };
 
-// Four-legged bodies: quadrupeds and dragons (which add wings and longer necks and tails).
+const QuadrupedSpecies kUngulates[] = {
+    {"deer", 0.80, 1.10, 0.85, 0.06, 0.55, 50, 3, 5, 0.35, -40, 0.12, 1, 2, -30, 0, 4},
+    {"goat", 0.50, 0.70, 1.00, 0.05, 0.45, 45, 2, 4, 0.40, -40, 0.15, 1, 2, 20, 0, 8},
+    {"camel", 1.50, 1.90, 0.75, 0.10, 0.85, 25, 4, 7, 0.35, -10, 0.30, 2, 3, -60, 0, 12},
+    {"giraffe", 1.80, 2.20, 0.60, 0.35, 1.40, 60, 5, 7, 0.30, -30, 0.45, 2, 4, -70, 0, 4},
+};
+
+// Four-legged bodies: quadrupeds, ungulates, elephants and dragons (which add wings and longer necks and tails).
 struct FourLegged {
   QuadrupedSpecies species;
   int spine_min, spine_max;
   bool wings;
+  bool hooves = false;       // the last leg joint is always there, a Hoof
+  double trunk = 0.0;        // trunk length / hind leg length, 0 without one
+  int trunk_min = 0, trunk_max = 0;
 };
 
 void build_four_legged(Body& body, SplitMix64& rng, RestPose pose, const FourLegged& plan) {
@@ -51,7 +62,8 @@ void build_four_legged(Body& body, SplitMix64& rng, RestPose pose, const FourLeg
   const int spine_count = rng.integer(plan.spine_min, plan.spine_max);
   const int neck_count = rng.integer(sp.neck_min, sp.neck_max);
   const int tail_count = rng.integer(sp.tail_min, sp.tail_max);
-  const bool toes = rng.chance(0.75);
+  const bool toes = plan.hooves || rng.chance(0.75);
+  const Part toe = plan.hooves ? Part::Hoof : Part::Toe;
   const bool jaw = rng.chance(plan.wings ? 0.75 : 0.35);
   const bool wing_finger = rng.chance(0.7);
   const double body_length = leg * sp.body * rng.uniform(0.9, 1.1);
@@ -74,7 +86,7 @@ void build_four_legged(Body& body, SplitMix64& rng, RestPose pose, const FourLeg
                 {0.28 * leg, crouched ? std::min(sp.foot_degrees + 10.0, 45.0) : sp.foot_degrees}};
   hind.end_length = (sp.foot_degrees > 45 ? 0.12 : 0.08) * leg;
   if (toes) {
-    hind.joints = leg_specs({Part::UpperLeg, Part::LowerLeg, Part::Foot, Part::Toe}, "hind", 0);
+    hind.joints = leg_specs({Part::UpperLeg, Part::LowerLeg, Part::Foot, toe}, "hind", 0);
   } else {
     hind.joints = leg_specs({Part::UpperLeg, Part::LowerLeg, Part::Foot}, "hind", 0);
     hind.bones[1].length += hind.bones[2].length;
@@ -112,6 +124,13 @@ void build_four_legged(Body& body, SplitMix64& rng, RestPose pose, const FourLeg
     body.limb(LimbKind::Jaw, Side::None, 0,
               body.add_chain(head_joint, {spec(Part::Jaw)}, {jaw_position, jaw_position + head_direction * (0.7 * head)}));
   }
+  if (plan.trunk > 0.0) {  // from the tip of the face, down and curling back a little at the end
+    const int count = rng.integer(plan.trunk_min, plan.trunk_max);
+    std::vector<Vec3> points = curled_chain(body.head_tip, Vec3::UnitZ(), -60.0, -30.0 / count, count,
+                                            plan.trunk * leg * rng.uniform(0.9, 1.1));
+    keep_above(points, 0.05 * root_height);
+    body.limb(LimbKind::Trunk, Side::None, 0, body.add_chain(head_joint, chain_specs(Part::Trunk, count), points));
+  }
 
   // Tail, back from the hips.
   std::vector<Vec3> tail_points = curled_chain(root_position + Vec3(0.0, 0.03 * leg, -0.1 * leg), -Vec3::UnitZ(),
@@ -131,7 +150,7 @@ void build_four_legged(Body& body, SplitMix64& rng, RestPose pose, const FourLeg
                  {0.16 * leg * front_ratio, front_foot}};
   front.end_length = hind.end_length;
   if (toes) {
-    front.joints = leg_specs({Part::Shoulder, Part::UpperLeg, Part::LowerLeg, Part::Foot, Part::Toe}, "front", 0);
+    front.joints = leg_specs({Part::Shoulder, Part::UpperLeg, Part::LowerLeg, Part::Foot, toe}, "front", 0);
   } else {
     front.joints = leg_specs({Part::Shoulder, Part::UpperLeg, Part::LowerLeg, Part::Foot}, "front", 0);
     front.bones[2].length += front.bones[3].length;
@@ -169,6 +188,22 @@ void build_four_legged(Body& body, SplitMix64& rng, RestPose pose, const FourLeg
 void build_quadruped(Body& body, SplitMix64& rng, RestPose pose) {
   const QuadrupedSpecies& species = kQuadrupeds[rng.integer(0, static_cast<int>(std::size(kQuadrupeds)) - 1)];
   build_four_legged(body, rng, pose, {species, 2, 4, false});
+}
+
+void build_ungulate(Body& body, SplitMix64& rng, RestPose pose) {
+  const QuadrupedSpecies& species = kUngulates[rng.integer(0, static_cast<int>(std::size(kUngulates)) - 1)];
+  FourLegged plan{species, 2, 4, false};
+  plan.hooves = true;
+  build_four_legged(body, rng, pose, plan);
+}
+
+void build_elephant(Body& body, SplitMix64& rng, RestPose pose) {
+  const QuadrupedSpecies elephant{"elephant", 1.6, 2.2, 0.95, 0.05, 0.12, 10, 1, 2, 0.45, -20, 0.5, 2, 4, -75, 0, 0};
+  FourLegged plan{elephant, 2, 4, false};
+  plan.trunk = 0.75;
+  plan.trunk_min = 4;
+  plan.trunk_max = 8;
+  build_four_legged(body, rng, pose, plan);
 }
 
 void build_dragon(Body& body, SplitMix64& rng, RestPose pose) {

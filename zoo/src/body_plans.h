@@ -23,6 +23,9 @@ enum class Part {
   Coxa, UpperLeg, LowerLeg, Foot, Toe,
   WingArm, WingForeArm, WingHand, WingFinger,
   Fin, Antenna, Palp,
+  Claw,   // a crab's pincer
+  Hoof,   // an ungulate's last joint
+  Trunk,  // an elephant's trunk
 };
 
 struct JointSpec {
@@ -160,6 +163,8 @@ void build_bird(Body& body, SplitMix64& rng, RestPose pose);
 // body_plan_quadruped_dragon.cpp
 void build_quadruped(Body& body, SplitMix64& rng, RestPose pose);
 void build_dragon(Body& body, SplitMix64& rng, RestPose pose);
+void build_ungulate(Body& body, SplitMix64& rng, RestPose pose);
+void build_elephant(Body& body, SplitMix64& rng, RestPose pose);
 // body_plan_snake_fish.cpp
 void build_snake(Body& body, SplitMix64& rng, RestPose pose);
 void build_fish(Body& body, SplitMix64& rng, RestPose pose);
@@ -167,5 +172,11 @@ void build_fish(Body& body, SplitMix64& rng, RestPose pose);
 void build_hexapod(Body& body, SplitMix64& rng, RestPose pose);
 void build_spider(Body& body, SplitMix64& rng, RestPose pose);
 void build_centipede(Body& body, SplitMix64& rng, RestPose pose);
+void build_crab(Body& body, SplitMix64& rng, RestPose pose);
+// body_plan_bird.cpp (ground birds: species of longer legs and necks, on the bird's builder)
+void build_ground_bird(Body& body, SplitMix64& rng, RestPose pose);
+// body_plan_hopper_dinosaur.cpp
+void build_hopper(Body& body, SplitMix64& rng, RestPose pose);
+void build_dinosaur(Body& body, SplitMix64& rng, RestPose pose);
 
 }  // namespace nec::zoo::detail

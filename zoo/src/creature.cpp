@@ -143,8 +143,26 @@ std::string_view body_plan_name(BodyPlan plan) {
     case BodyPlan::Fish: return "fish";
     case BodyPlan::Dragon: return "dragon";
     case BodyPlan::Centipede: return "centipede";
+    case BodyPlan::Crab: return "crab";
+    case BodyPlan::Ungulate: return "ungulate";
+    case BodyPlan::Elephant: return "elephant";
+    case BodyPlan::GroundBird: return "ground_bird";
+    case BodyPlan::Hopper: return "hopper";
+    case BodyPlan::Dinosaur: return "dinosaur";
   }
   return "unknown";
+}
+
+BodyPlan moves_like(BodyPlan plan) {
+  switch (plan) {
+    case BodyPlan::Crab: return BodyPlan::Spider;
+    case BodyPlan::Ungulate:
+    case BodyPlan::Elephant: return BodyPlan::Quadruped;
+    case BodyPlan::GroundBird:
+    case BodyPlan::Hopper:
+    case BodyPlan::Dinosaur: return BodyPlan::Bird;
+    default: return plan;
+  }
 }
 
 bool parse_body_plan(std::string_view name, BodyPlan& plan) {
@@ -169,6 +187,7 @@ std::string_view limb_kind_name(LimbKind kind) {
     case LimbKind::Spine: return "spine";
     case LimbKind::Antenna: return "antenna";
     case LimbKind::Jaw: return "jaw";
+    case LimbKind::Trunk: return "trunk";
   }
   return "unknown";
 }
@@ -185,10 +204,12 @@ CreatureOptions sample_creature_options(BodyPlan plan, uint64_t seed) {
   SplitMix64 rng = detail::stream(plan, seed, detail::Stream::Options);
   CreatureOptions options;
   const double naming = rng.uniform();
-  options.naming = naming < 0.25   ? NamingStyle::Mixamo
-                   : naming < 0.45 ? NamingStyle::Blender
-                   : naming < 0.70 ? NamingStyle::Game
-                   : naming < 0.85 ? NamingStyle::Biped3ds
+  options.naming = naming < 0.22   ? NamingStyle::Mixamo
+                   : naming < 0.37 ? NamingStyle::Blender
+                   : naming < 0.55 ? NamingStyle::Game
+                   : naming < 0.67 ? NamingStyle::Biped3ds
+                   : naming < 0.77 ? NamingStyle::Maya
+                   : naming < 0.88 ? NamingStyle::Truebones
                                    : NamingStyle::Numbered;
   const double pose = rng.uniform();
   options.rest_pose = pose < 0.4 ? RestPose::TPose : pose < 0.7 ? RestPose::APose : RestPose::Crouched;
@@ -214,6 +235,12 @@ Creature make_creature(BodyPlan plan, uint64_t seed, const CreatureOptions& opti
     case BodyPlan::Fish: detail::build_fish(body, rng, options.rest_pose); break;
     case BodyPlan::Dragon: detail::build_dragon(body, rng, options.rest_pose); break;
     case BodyPlan::Centipede: detail::build_centipede(body, rng, options.rest_pose); break;
+    case BodyPlan::Crab: detail::build_crab(body, rng, options.rest_pose); break;
+    case BodyPlan::Ungulate: detail::build_ungulate(body, rng, options.rest_pose); break;
+    case BodyPlan::Elephant: detail::build_elephant(body, rng, options.rest_pose); break;
+    case BodyPlan::GroundBird: detail::build_ground_bird(body, rng, options.rest_pose); break;
+    case BodyPlan::Hopper: detail::build_hopper(body, rng, options.rest_pose); break;
+    case BodyPlan::Dinosaur: detail::build_dinosaur(body, rng, options.rest_pose); break;
   }
   SplitMix64 units = detail::stream(plan, seed, detail::Stream::Units);
   return detail::finish(plan, seed, options, std::move(body), units.chance(0.4) ? 100.0 : 1.0);

@@ -1,10 +1,11 @@
 // Joint names (body_plans.h): the word of each part in every naming style
-// (Mixamo, Blender, game, 3ds Max Biped), each mapping to a meaningful
+// (Mixamo, Blender, game, 3ds Max Biped, Maya, Truebones), each mapping to a meaningful
 // canonical name, and the joint specs that body plans describe joints with.
 #include "body_plans.h"
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cctype>
 #include <stdexcept>
 
@@ -50,8 +51,17 @@ PartWords part_words(Part part) {
     case Part::Fin: return {"Fin", "fin", "fin", "Fin"};
     case Part::Antenna: return {"Antenna", "antenna", "antenna", "Antenna"};
     case Part::Palp: return {"Palp", "palp", "palp", "Palp"};
+    case Part::Claw: return {"Claw", "claw", "claw", "Claw"};
+    case Part::Hoof: return {"Hoof", "hoof", "hoof", "Hoof"};
+    case Part::Trunk: return {"Trunk", "trunk", "trunk", "Trunk"};
   }
   return {"Joint", "joint", "joint", "Joint"};
+}
+
+// "Wing UpperArm" -> "WingUpperArm".
+std::string without_spaces(std::string word) {
+  word.erase(std::remove(word.begin(), word.end(), ' '), word.end());
+  return word;
 }
 
 bool is_leg_part(Part part) {
@@ -120,6 +130,26 @@ std::string joint_name(const JointSpec& joint, NamingStyle style) {
       name += std::string(" ") + words.biped3ds;
       if (joint.pair > 0) name += std::to_string(joint.pair);
       if (joint.index > 0) name += (joint.pair > 0 ? " " : "") + std::to_string(joint.index);
+      return name;
+    case NamingStyle::Maya:  // L_front_thigh_JNT, C_spine_02_JNT, L_leg_03_02_JNT
+      name = sided ? (left ? "L_" : "R_") : "C_";
+      if (joint.pair > 0 && is_leg_part(joint.part)) {
+        return name + fmt::format("leg_{:02d}_{:02d}_JNT", joint.pair, joint.segment + 1);
+      }
+      if (!joint.qualifier.empty()) name += joint.qualifier + "_";
+      name += words.blender;
+      if (joint.pair > 0) name += fmt::format("_{:02d}", joint.pair);
+      if (joint.index >= 0) name += fmt::format("_{:02d}", joint.index + 1);
+      return name + "_JNT";
+    case NamingStyle::Truebones:  // BN_FrontThigh_L, BN_Spine02, BN_Leg_L_03_02
+      name = "BN_";
+      if (joint.pair > 0 && is_leg_part(joint.part)) {
+        return name + fmt::format("Leg_{}_{:02d}_{:02d}", left ? "L" : "R", joint.pair, joint.segment + 1);
+      }
+      name += capitalized(joint.qualifier) + without_spaces(words.biped3ds);
+      if (joint.pair > 0) name += fmt::format("{:02d}", joint.pair);
+      if (joint.index >= 0) name += fmt::format("{:02d}", joint.index + 1);
+      if (sided) name += left ? "_L" : "_R";
       return name;
     case NamingStyle::Numbered:
       break;

@@ -23,7 +23,7 @@ constexpr ActionName kActionNames[] = {
     {Action::Fly, "fly"},         {Action::Glide, "glide"},     {Action::TakeOff, "take_off"},
     {Action::FlapWings, "flap_wings"}, {Action::Wave, "wave"},     {Action::RaiseHands, "raise_hands"},
     {Action::Point, "point"},     {Action::Clap, "clap"},       {Action::Bow, "bow"},
-    {Action::Crouch, "crouch"},   {Action::Kick, "kick"},
+    {Action::Crouch, "crouch"},   {Action::Kick, "kick"},       {Action::Eat, "eat"},
 };
 
 double fraction(double x) { return x - std::floor(x); }
@@ -85,7 +85,7 @@ std::vector<Action> supported_actions(BodyPlan plan) {
       return {A::Idle, A::Walk,       A::Run,   A::Turn, A::Jump, A::Sit,    A::Attack,
               A::Wave, A::RaiseHands, A::Point, A::Clap, A::Bow,  A::Crouch, A::Kick};
     case BodyPlan::Quadruped:
-      return {A::Idle, A::Walk, A::Trot, A::Gallop, A::Turn, A::Jump, A::Sit, A::LieDown, A::Attack};
+      return {A::Idle, A::Walk, A::Trot, A::Gallop, A::Turn, A::Jump, A::Sit, A::LieDown, A::Attack, A::Eat};
     case BodyPlan::Hexapod:
     case BodyPlan::Spider:
       return {A::Idle, A::Walk, A::Run, A::Turn, A::Jump, A::LieDown, A::Attack};
@@ -97,9 +97,21 @@ std::vector<Action> supported_actions(BodyPlan plan) {
       return {A::Idle, A::Attack, A::Swim};
     case BodyPlan::Dragon:
       return {A::Idle, A::Walk,   A::Trot, A::Gallop, A::Turn,    A::Sit,
-              A::LieDown, A::Attack, A::Fly, A::Glide, A::TakeOff, A::FlapWings};
+              A::LieDown, A::Attack, A::Fly, A::Glide, A::TakeOff, A::FlapWings, A::Eat};
     case BodyPlan::Centipede:
       return {A::Idle, A::Walk, A::Run, A::Attack};
+    case BodyPlan::Crab:
+      return {A::Idle, A::Walk, A::Run, A::Turn, A::LieDown, A::Attack};
+    case BodyPlan::Ungulate:
+      return {A::Idle, A::Walk, A::Trot, A::Gallop, A::Turn, A::Jump, A::LieDown, A::Eat};
+    case BodyPlan::Elephant:
+      return {A::Idle, A::Walk, A::Trot, A::Turn, A::LieDown, A::Attack};
+    case BodyPlan::GroundBird:
+      return {A::Idle, A::Walk, A::Run, A::Jump, A::Sit, A::Attack, A::FlapWings};
+    case BodyPlan::Hopper:
+      return {A::Idle, A::Walk, A::Run, A::Jump, A::Sit};
+    case BodyPlan::Dinosaur:
+      return {A::Idle, A::Walk, A::Run, A::Sit, A::Attack};
   }
   return {A::Idle};
 }
@@ -184,11 +196,17 @@ GaitPattern gait_pattern(const Creature& creature, Action action) {
   int pairs = 0;
   for (const Limb* leg : legs) pairs = std::max(pairs, leg->pair + 1);
   const bool fast = action == Action::Run || action == Action::Gallop;
+  const BodyPlan plan = moves_like(creature.plan);
+  if (creature.plan == BodyPlan::Hopper) {  // both feet together, a flight between hops
+    gait.phases.assign(legs.size(), 0.0);
+    gait.duty_factor = fast ? 0.3 : 0.45;
+    return gait;
+  }
   for (const Limb* leg : legs) {
     const bool right = leg->side == Side::Right;
     const double contralateral = right ? 0.5 : 0.0;
     double phase = 0.0;
-    switch (creature.plan) {
+    switch (plan) {
       case BodyPlan::Quadruped:
       case BodyPlan::Dragon:
         if (action == Action::Trot) {
@@ -210,7 +228,7 @@ GaitPattern gait_pattern(const Creature& creature, Action action) {
       case BodyPlan::Spider:
       case BodyPlan::Centipede: {
         // Wave from back to front: each leg steps a fixed lag after the one behind it.
-        const double lag = creature.plan == BodyPlan::Spider ? 1.0 / std::max(pairs, 1)
+        const double lag = plan == BodyPlan::Spider ? 1.0 / std::max(pairs, 1)
                                                               : std::min(1.0 / std::max(pairs, 1), 0.125);
         phase = fraction(-(pairs - 1 - leg->pair) * lag + contralateral);
         break;
@@ -221,7 +239,7 @@ GaitPattern gait_pattern(const Creature& creature, Action action) {
     }
     gait.phases.push_back(phase);
   }
-  switch (creature.plan) {
+  switch (plan) {
     case BodyPlan::Quadruped:
     case BodyPlan::Dragon:
       gait.duty_factor = action == Action::Trot ? 0.5 : action == Action::Gallop ? 0.3 : 0.7;

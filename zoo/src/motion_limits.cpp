@@ -16,7 +16,8 @@ constexpr double kMinSwingSeconds = 0.1;  // shortest swing the cadence may dema
 GaitTuning gait_tuning(BodyPlan plan, Action action) {
   const bool trot = action == Action::Trot;
   const bool fast = action == Action::Run || action == Action::Gallop;
-  switch (plan) {
+  if (plan == BodyPlan::Hopper) return fast ? GaitTuning{4.0, 2.0, 0.25} : GaitTuning{1.6, 1.4, 0.2};  // hops
+  switch (moves_like(plan)) {
     case BodyPlan::Quadruped:
       return trot ? GaitTuning{2.6, 1.5, 0.15} : fast ? GaitTuning{5.0, 2.0, 0.2} : GaitTuning{1.3, 0.9, 0.12};
     case BodyPlan::Dragon:
@@ -128,10 +129,10 @@ MotionSpec effective_spec(const Creature& creature, const Rig& rig, const Motion
       }
       break;
   }
-  if (action != Action::Walk) spec.direction = 0.0;
+  if (action != Action::Walk && action != Action::Run) spec.direction = 0.0;
   if (!takes_manner(action)) spec.manner = Manner::Neutral;
   if (spec.direction != 0.0) {
-    // Backing up and sidestepping go straight, at a careful pace.
+    // Backing up and moving sideways go straight, below the typical pace of the gait.
     spec.turn_rate = 0.0;
     spec.speed = std::min(spec.speed, 0.8 * typical);
   }

@@ -32,7 +32,7 @@ bool is_chain(const Skeleton& skeleton, const std::vector<int>& joints) {
 
 // Default knee direction (body axes) for a straight rest leg.
 Vec3 default_pole(BodyPlan plan, const Limb& leg) {
-  switch (plan) {
+  switch (moves_like(plan)) {
     case BodyPlan::Quadruped:
     case BodyPlan::Dragon:
       return leg.pair == 0 ? Vec3(0, 0, -1) : Vec3(0, 0, 1);
@@ -257,6 +257,9 @@ Rig analyze(const Creature& creature) {
         break;
       case LimbKind::Jaw:
         rig.jaws.push_back(&limb);
+        break;
+      case LimbKind::Trunk:
+        rig.trunks.push_back(&limb);
         break;
       default:
         break;

@@ -93,7 +93,7 @@ struct Rig {
   std::vector<LegRig> legs;     // usable or not, in Creature::limbs order
   Midline midline;
   std::vector<Appendage> arms, wings, fins;
-  std::vector<const Limb*> antennae, jaws;
+  std::vector<const Limb*> antennae, jaws, trunks;
   double max_stance_travel = 0.0;  // most a stance foot may travel relative to its hip, min over legs
   double foot_radius = 0.0;        // largest horizontal distance of a neutral foot from the root
 };

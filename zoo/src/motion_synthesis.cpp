@@ -14,7 +14,7 @@ namespace nec::zoo {
 namespace detail {
 
 Synthesizer::Synthesizer(const Creature& creature, const Rig& rig, const MotionSpec& spec)
-    : creature_(creature), skeleton_(creature.skeleton), rig_(rig), spec_(spec), style_(mix_seed(spec.seed, 0x5EED)) {
+    : creature_(creature), motion_plan_(moves_like(creature.plan)), skeleton_(creature.skeleton), rig_(rig), spec_(spec), style_(mix_seed(spec.seed, 0x5EED)) {
   joint_count_ = skeleton_.joint_count();
   fps_ = spec_.fps;
   frames_ = std::max(2, static_cast<int>(std::lround(spec_.seconds * spec_.fps)));
@@ -101,13 +101,13 @@ void Synthesizer::plan_travel() {
         speed = v * ramp_between(t, event_b_ - 0.1, event_b_ + 1.2 * k);
         break;
       case Action::Attack:
-        if (creature_.plan == BodyPlan::Fish) {
+        if (motion_plan_ == BodyPlan::Fish) {
           const double burst = pulse(t, event_b_, event_b_ + 0.1, event_c_, event_c_ + 0.5 * k);
           speed = rig_.body_length * (0.1 + 2.4 * burst);
         }
         break;
       case Action::Idle:
-        if (creature_.plan == BodyPlan::Fish) speed = 0.03 * rig_.body_length;
+        if (motion_plan_ == BodyPlan::Fish) speed = 0.03 * rig_.body_length;
         break;
       default:
         if (is_locomotion(spec_.action)) {

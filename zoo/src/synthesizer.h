@@ -53,6 +53,7 @@ class Synthesizer {
   void pose_appendages(int f, double t);
   void assemble_frame(int f);
   void pose_wing(const Appendage& wing, int f, double t);
+  void plan_feeding();
   struct ArmGesture {
     double weight = 0.0;           // 0: the ordinary arm pose, 1: fully in the gesture
     Vec3 upper = -Vec3::UnitY();   // upper arm direction in the chest's heading frame
@@ -72,6 +73,7 @@ class Synthesizer {
   Vec3 swing_position(size_t leg, const Swing& swing, const Vec3& from, const Vec3& to, double t, int f) const;
 
   const Creature& creature_;
+  const BodyPlan motion_plan_;  // moves_like(creature_.plan): whose motion rules apply
   const Skeleton& skeleton_;
   const Rig& rig_;
   MotionSpec spec_;
@@ -115,6 +117,11 @@ class Synthesizer {
   // Action timeline (seconds), set by plan_body for the actions that use them.
   double event_a_ = 0.0, event_b_ = 0.0, event_c_ = 0.0, event_d_ = 0.0;
   double altitude_ = 0.0;
+  // Eat: how far the body tips forward (radians, negative: nose down) and the global pitch each neck joint
+  // and the head add at the lowest pose (plan_feeding).
+  double feeding_pitch_ = 0.0;
+  std::vector<int> feeding_joints_;
+  std::vector<double> feeding_joint_pitch_;
 
   std::vector<Quat> local_;       // (total_, J)
   std::vector<Quat> global_;      // (total_, J) body FK (legs at rest)

@@ -1,4 +1,4 @@
-// Limbs that do not stand: fins, antennae and jaws; the frame's forward
+// Limbs that do not stand: fins, antennae, jaws and trunks; the frame's forward
 // kinematics with the arms aimed in the chest's frame; wings folded, spread
 // or beating for flight (Synthesizer::pose_appendages, assemble_frame, pose_wing).
 #include "synthesizer.h"
@@ -8,7 +8,7 @@
 
 namespace nec::zoo::detail {
 
-// Fins, antennae and jaws: local rotations.
+// Fins, antennae, jaws and trunks: local rotations.
 void Synthesizer::pose_appendages(int f, double t) {
   const Action action = spec_.action;
   const double share = gait_share(t);
@@ -37,11 +37,26 @@ void Synthesizer::pose_appendages(int f, double t) {
               .normalized();
     }
   }
+  // Trunks: a slow swing passed down the chain; curled up in an attack (trumpeting).
+  for (const Limb* trunk : rig_.trunks) {
+    const double raise = action == Action::Attack ? pulse(t, event_a_ - 0.3, event_b_, event_d_, event_d_ + 0.4) : 0.0;
+    const double count = static_cast<double>(trunk->joints.size());
+    for (size_t k = 0; k < trunk->joints.size(); ++k) {
+      const double phase = 2.0 * kPi * 0.4 * t - 0.5 * k + sway_phase_;
+      local_[at(f, trunk->joints[k])] =
+          (yaw_rotation(radians(8.0) * std::sin(phase)) *
+           axis_angle(Vec3::UnitX(), radians(4.0) * std::cos(phase) - radians(120.0) / count * raise))
+              .normalized();
+    }
+  }
   // Jaws: open for attacks, a little while breathing hard.
   for (const Limb* jaw : rig_.jaws) {
     double open = 0.0;
     if (action == Action::Attack) open = radians(30.0) * pulse(t, event_a_ + 0.15, event_b_, event_b_ + 0.05, event_b_ + 0.15);
     if (action == Action::Gallop || action == Action::Run) open = radians(6.0) * share;
+    if (action == Action::Eat) {  // chewing
+      open = radians(8.0) * (0.5 + 0.5 * std::sin(2.0 * kPi * 2.2 * t)) * pulse(t, event_b_, event_b_ + 0.2, event_c_ - 0.2, event_c_);
+    }
     const Quat q = axis_angle(Vec3::UnitX(), open);
     if (!jaw->joints.empty()) local_[at(f, jaw->joints[0])] = q;
   }
@@ -162,6 +177,13 @@ void Synthesizer::assemble_frame(int f) {
     const Vec3 down(side * (0.12 + std::sin(raise)), -1.0, 0.0);
     Vec3 upper = chest * (axis_angle(Vec3::UnitX(), -swing) * down.normalized());
     Vec3 lower = chest * (axis_angle(Vec3::UnitX(), -(swing + elbow)) * Vec3(side * 0.05, -1.0, 0.0).normalized());
+    if (creature_.plan == BodyPlan::Crab) {
+      // Claws held out in front, swaying with the steps; raised and thrust forward in an attack.
+      const double threat = action == Action::Attack ? pulse(t, event_a_ - 0.3, event_b_, event_c_, event_d_) : 0.0;
+      const double sway = 0.1 * share * std::sin(2.0 * kPi * (clock + same_side_phase));
+      upper = chest * Vec3(side * 0.7, 0.1 + 0.9 * threat, 0.7 + sway).normalized();
+      lower = chest * Vec3(-side * 0.3, 0.05 + 0.3 * threat, 1.0).normalized();
+    }
     if (const ArmGesture gesture = arm_gesture(arm, f, t); gesture.weight > 0.0) {
       upper = ((1.0 - gesture.weight) * upper + gesture.weight * (chest * gesture.upper)).normalized();
       lower = ((1.0 - gesture.weight) * lower + gesture.weight * (chest * gesture.lower)).normalized();
@@ -191,7 +213,7 @@ void Synthesizer::pose_wing(const Appendage& wing, int f, double t) {
   const Action action = spec_.action;
   const double T = spec_.seconds;
   const double side = side_sign(wing.limb->side);
-  const double rate = creature_.plan == BodyPlan::Dragon ? 1.4 : 3.0;  // wing beats per second
+  const double rate = motion_plan_ == BodyPlan::Dragon ? 1.4 : 3.0;  // wing beats per second
   double open = 0.0;       // 0 folded, 1 spread
   double amplitude = 0.0;  // beat amplitude, radians
   double beat_rate = rate;

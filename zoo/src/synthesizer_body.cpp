@@ -3,6 +3,8 @@
 // for every action, then the limbs and midline posed frame by frame.
 #include "synthesizer.h"
 
+#include <optional>
+
 #include <algorithm>
 #include <cmath>
 
@@ -52,6 +54,13 @@ void Synthesizer::plan_body() {
       event_a_ = 0.15 * T;                      // starts to go down
       event_b_ = event_a_ + std::min(1.0, 0.3 * T);  // low, and stays
       break;
+    case Action::Eat:
+      event_a_ = 0.12 * T;                      // the head starts down
+      event_b_ = event_a_ + std::min(1.2, 0.3 * T);  // at the ground: grazing
+      event_c_ = std::max(event_b_, 0.8 * T);   // looks up
+      event_d_ = std::max(event_c_, 0.95 * T);  // head up again
+      plan_feeding();
+      break;
     case Action::Kick:
       event_a_ = 0.25 * T;                      // the knee comes up
       event_b_ = event_a_ + 0.3 * k;            // the leg snaps out
@@ -88,7 +97,7 @@ void Synthesizer::plan_body() {
         y += 0.008 * r * breath;
         local_offset.x() = 0.02 * r * std::sin(2.0 * kPi * 0.13 * t + sway_phase_);
         if (spec_.action == Action::FlapWings) {
-          const double flap = std::sin(2.0 * kPi * (creature_.plan == BodyPlan::Dragon ? 1.3 : 2.6) * t);
+          const double flap = std::sin(2.0 * kPi * (motion_plan_ == BodyPlan::Dragon ? 1.3 : 2.6) * t);
           y += 0.03 * r * flap * pulse(t, 0.2, 0.5, T - 0.5, T - 0.2);
         }
         break;
@@ -97,7 +106,14 @@ void Synthesizer::plan_body() {
       case Action::Run:
       case Action::Gallop:
       case Action::Turn: {
-        if (creature_.plan == BodyPlan::Biped || creature_.plan == BodyPlan::Bird) {
+        if (creature_.plan == BodyPlan::Hopper) {
+          // Both feet push off together: the body flies between hops, nose up at take-off and down to land.
+          const double phase = clock - std::floor(clock);
+          const double duty = gait_.duty_factor;
+          const double u = phase < duty ? 0.0 : (phase - duty) / (1.0 - duty);
+          y += (spec_.action == Action::Run ? 0.3 : 0.18) * r * 4.0 * u * (1.0 - u) * share;
+          pitch = radians(6.0) * std::sin(2.0 * kPi * phase) * share;
+        } else if (motion_plan_ == BodyPlan::Biped || motion_plan_ == BodyPlan::Bird) {
           yaw = radians(spec_.action == Action::Run ? 7.0 : 5.0) * std::sin(2.0 * kPi * clock) * share;
           roll = radians(2.0) * std::sin(2.0 * kPi * clock) * share;
           local_offset.x() = 0.025 * r * std::sin(2.0 * kPi * clock + 0.5 * kPi) * share;
@@ -134,13 +150,13 @@ void Synthesizer::plan_body() {
       }
       case Action::Sit: {
         const double w = ramp_between(t, event_a_, event_b_);
-        if (creature_.plan == BodyPlan::Biped) {
+        if (motion_plan_ == BodyPlan::Biped) {
           // Squat down and back onto the ground, leaning forward on the way.
           y = stand + (0.3 * r - stand) * w;
           local_offset.z() = -0.45 * r * w;
           pitch = -radians(25.0) * pulse(t, event_a_, 0.5 * (event_a_ + event_b_), 0.5 * (event_a_ + event_b_), event_b_ + 0.3) -
                   radians(5.0) * w;
-        } else if (creature_.plan == BodyPlan::Bird) {
+        } else if (motion_plan_ == BodyPlan::Bird) {
           y = stand + (0.45 * r - stand) * w;
         } else {
           // Hindquarters down, chest up on straight front legs.
@@ -187,8 +203,8 @@ void Synthesizer::plan_body() {
       }
       case Action::LieDown: {
         const double w = ramp_between(t, event_a_, event_b_);
-        const bool sprawler = creature_.plan == BodyPlan::Hexapod || creature_.plan == BodyPlan::Spider ||
-                              creature_.plan == BodyPlan::Centipede;
+        const bool sprawler = motion_plan_ == BodyPlan::Hexapod || motion_plan_ == BodyPlan::Spider ||
+                              motion_plan_ == BodyPlan::Centipede;
         const double low = sprawler ? 0.12 * r : 0.32 * r;
         y = stand + (std::min(low, stand) - stand) * w;
         y += 0.006 * r * breath;
@@ -197,7 +213,7 @@ void Synthesizer::plan_body() {
       case Action::Attack: {
         const double windup = pulse(t, event_a_, event_b_ - 0.05, event_b_ - 0.05, event_b_);
         const double strike = pulse(t, event_b_ - 0.05, event_b_ + 0.08, event_c_, event_d_);
-        switch (creature_.plan) {
+        switch (motion_plan_) {
           case BodyPlan::Biped:
             yaw = radians(25.0) * side_sign(spec_.side) * (windup - 1.4 * strike);
             local_offset.z() = 0.08 * r * strike;
@@ -228,6 +244,12 @@ void Synthesizer::plan_body() {
         y += 0.008 * r * breath;
         break;
       }
+      case Action::Eat: {
+        const double down = pulse(t, event_a_, event_b_, event_c_, event_d_);
+        y += 0.006 * r * breath - 0.05 * r * down;
+        pitch = feeding_pitch_ * down;
+        break;
+      }
       case Action::TakeOff: {
         const double crouch = 0.18 * r * pulse(t, event_a_, event_b_ - 0.12 * k, event_b_ - 0.12 * k, event_b_);
         const double climb = t > event_b_ ? (t - event_b_) : 0.0;
@@ -238,7 +260,7 @@ void Synthesizer::plan_body() {
         break;
       }
       case Action::Fly: {
-        const double flap_rate = creature_.plan == BodyPlan::Dragon ? 1.4 : 3.0;
+        const double flap_rate = motion_plan_ == BodyPlan::Dragon ? 1.4 : 3.0;
         y = altitude_ + 0.03 * rig_.body_length * std::sin(2.0 * kPi * flap_rate * t + 0.5 * kPi);
         roll = -std::clamp(0.6 * turn_[f], -radians(35.0), radians(35.0));
         pitch = radians(3.0);
@@ -261,11 +283,11 @@ void Synthesizer::plan_body() {
       y -= manner_.lower * r;
       y += manner_.bounce * r * std::abs(std::sin(2.0 * kPi * clock)) * share;
     }
-    if (creature_.plan == BodyPlan::Fish) {
+    if (motion_plan_ == BodyPlan::Fish) {
       y = std::max(rig_.rest_height, 0.4 * rig_.body_length);
       if (spec_.action == Action::Idle) y += 0.01 * rig_.body_length * breath;
     }
-    if (creature_.plan == BodyPlan::Snake) y = rig_.rest_height;
+    if (motion_plan_ == BodyPlan::Snake) y = rig_.rest_height;
     // Path followers sit on their undulating path, off the centre line.
     const PathWave wave = path_wave();
     if (wave.amplitude > 0.0) {
@@ -287,6 +309,74 @@ void Synthesizer::plan_body() {
     pose_midline(f, t);
     assemble_frame(f);
   }
+}
+
+// Where a grazing head goes: the body tips forward (the front legs bending under it) by as little as lets
+// the neck and head reach the ground ahead of the forefeet; the chain from the first neck joint to the tip of
+// the head is then solved in the body's sagittal plane (FABRIK, from its rest shape), and each bone's change
+// of elevation becomes its joint's global pitch. A neck too short even then stretches towards the ground.
+void Synthesizer::plan_feeding() {
+  feeding_joints_.clear();
+  feeding_joint_pitch_.clear();
+  const std::vector<const Limb*> heads = creature_.limbs_of(LimbKind::Head);
+  if (heads.empty()) return;
+  for (const Limb* neck : creature_.limbs_of(LimbKind::Neck)) feeding_joints_ = neck->joints;
+  const int head = heads.front()->joints.back();
+  feeding_joints_.push_back(head);
+  // The muzzle: the foremost end site of the head or of a joint it carries (a jaw).
+  const auto carried_by_head = [&](int j) {
+    for (; j >= 0; j = skeleton_.parents[j]) {
+      if (j == head) return true;
+    }
+    return false;
+  };
+  std::optional<Vec3> muzzle;
+  for (const EndSite& site : skeleton_.end_sites) {
+    const Vec3 tip = rig_.rest[site.parent] + site.offset;
+    if (carried_by_head(site.parent) && (!muzzle || tip.z() > muzzle->z())) muzzle = tip;
+  }
+  if (!muzzle) {
+    feeding_joints_.clear();
+    return;
+  }
+  // Rest points in the sagittal plane (x = 0), relative to the root: the joints, then the muzzle.
+  std::vector<Vec3> rest;
+  const auto sagittal = [&](const Vec3& p) { return Vec3(0.0, p.y() - rig_.rest[0].y(), p.z() - rig_.rest[0].z()); };
+  for (int j : feeding_joints_) rest.push_back(sagittal(rig_.rest[j]));
+  rest.push_back(sagittal(*muzzle));
+  std::vector<double> lengths;
+  double total = 0.0;
+  for (size_t i = 0; i + 1 < rest.size(); ++i) {
+    lengths.push_back((rest[i + 1] - rest[i]).norm());
+    total += lengths.back();
+  }
+  const double height = rig_.stand_height - 0.05 * reach_;  // the root, lowered a little while feeding
+  const auto placed = [&](double pitch) {  // the rest points with the body tipped by `pitch` (+ = nose up)
+    std::vector<Vec3> points;
+    for (const Vec3& p : rest) {
+      points.push_back(Vec3(0.0, height + p.z() * std::sin(pitch) + p.y() * std::cos(pitch),
+                            p.z() * std::cos(pitch) - p.y() * std::sin(pitch)));
+    }
+    return points;
+  };
+  const double reach = 0.9 * total;
+  const double muzzle_height = 0.03 * reach_;
+  double pitch = 0.0;
+  for (int degrees = 0; degrees <= 25; ++degrees) {
+    pitch = -radians(degrees);
+    if (placed(pitch).front().y() - muzzle_height <= reach) break;
+  }
+  const std::vector<Vec3> before = placed(pitch);
+  const Vec3& base = before.front();
+  const double drop = base.y() - muzzle_height;
+  const double ahead = std::sqrt(std::max(reach * reach - drop * drop, std::pow(0.25 * total, 2)));
+  std::vector<Vec3> after = before;
+  fabrik(after, lengths, Vec3(0.0, muzzle_height, base.z() + std::min(ahead, reach)));
+  const auto elevation = [](const Vec3& from, const Vec3& to) { return std::atan2(to.y() - from.y(), to.z() - from.z()); };
+  for (size_t i = 0; i + 1 < before.size(); ++i) {
+    feeding_joint_pitch_.push_back(elevation(after[i], after[i + 1]) - elevation(before[i], before[i + 1]));
+  }
+  feeding_pitch_ = pitch;
 }
 
 }  // namespace nec::zoo::detail

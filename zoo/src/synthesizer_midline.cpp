@@ -15,10 +15,10 @@ constexpr double kTailLag = 1.8;  // phase lag of the tail tip's sway behind its
 PathWave Synthesizer::path_wave() const {
   PathWave wave;
   const double body = rig_.body_length;
-  if (creature_.plan == BodyPlan::Snake) {
+  if (motion_plan_ == BodyPlan::Snake) {
     wave.amplitude = (spec_.action == Action::Idle ? 0.05 : 0.07) * body;
     wave.wavelength = 0.45 * body;
-  } else if (creature_.plan == BodyPlan::Centipede) {
+  } else if (motion_plan_ == BodyPlan::Centipede) {
     wave.amplitude = (spec_.action == Action::Run ? 0.025 : 0.008) * body;
     wave.wavelength = 0.5 * body;
   }
@@ -35,8 +35,8 @@ void Synthesizer::pose_midline(int f, double t) {
   const double span = std::max(m.front - m.back, 1e-9);
   const double body = rig_.body_length;
   const Action action = spec_.action;
-  const bool path_follower = creature_.plan == BodyPlan::Snake || creature_.plan == BodyPlan::Centipede;
-  const bool fish = creature_.plan == BodyPlan::Fish;
+  const bool path_follower = motion_plan_ == BodyPlan::Snake || motion_plan_ == BodyPlan::Centipede;
+  const bool fish = motion_plan_ == BodyPlan::Fish;
 
   // Curvature of the travelled path (radians per file unit), for bending the
   // body along it; turning on the spot bends as if walking at 2 leg lengths/s.
@@ -116,11 +116,11 @@ void Synthesizer::pose_midline(int f, double t) {
           const int spine_index = std::max(m.spine_index[j], 0);
           const double up_the_spine = std::min(1.0, spine_index / 3.0);
           // Bipeds: the chest counter-rotates against the pelvis; everyone breathes.
-          if (creature_.plan == BodyPlan::Biped || creature_.plan == BodyPlan::Bird) {
+          if (motion_plan_ == BodyPlan::Biped || motion_plan_ == BodyPlan::Bird) {
             yaw -= (root_yaw_[f] * 1.6) * up_the_spine;
           }
           pitch += radians(1.2) * breath * up_the_spine;
-          if ((creature_.plan == BodyPlan::Quadruped || creature_.plan == BodyPlan::Dragon) && action == Action::Walk) {
+          if ((motion_plan_ == BodyPlan::Quadruped || motion_plan_ == BodyPlan::Dragon) && action == Action::Walk) {
             yaw += radians(3.0) * share * std::sin(2.0 * kPi * clock - 2.0 * kPi * s / span);
           }
         }
@@ -132,14 +132,14 @@ void Synthesizer::pose_midline(int f, double t) {
         const double share_of_neck = 1.0 / neck_count;
         pitch = 0.4 * pitch_[f];
         yaw += look * share_of_neck * 1.2 + 0.25 * turn_[f] * share_of_neck;
-        if (is_gait(action) && creature_.plan != BodyPlan::Biped) {
+        if (is_gait(action) && motion_plan_ != BodyPlan::Biped) {
           // Nod twice per stride, each joint a little behind the one below it.
           pitch += radians(3.0) * share * std::sin(4.0 * kPi * clock - 0.3 * index) * share_of_neck * 2.0;
         }
         if (action == Action::Attack) {
           const double windup = pulse(t, event_a_, event_b_ - 0.05, event_b_ - 0.05, event_b_);
           const double strike = pulse(t, event_b_ - 0.05, event_b_ + 0.08, event_c_, event_d_);
-          switch (creature_.plan) {
+          switch (motion_plan_) {
             case BodyPlan::Bird: {
               const double pecks = 0.5 - 0.5 * std::cos(2.0 * kPi * 3.0 * (t - event_a_) / (event_d_ - event_a_));
               const double active = pulse(t, event_a_, event_a_ + 0.05, event_d_ - 0.05, event_d_);
@@ -154,8 +154,19 @@ void Synthesizer::pose_midline(int f, double t) {
               break;
           }
         }
+        if (action == Action::Eat) {
+          // Down to the ground (plan_feeding), nibbling while there.
+          const auto it = std::find(feeding_joints_.begin(), feeding_joints_.end(), j);
+          if (it != feeding_joints_.end()) {
+            const double down = pulse(t, event_a_, event_b_, event_c_, event_d_);
+            const double grazing = pulse(t, event_b_, event_b_ + 0.2, event_c_ - 0.2, event_c_);
+            pitch = pitch_[f] + down * feeding_joint_pitch_[static_cast<size_t>(it - feeding_joints_.begin())] +
+                    radians(4.0) * grazing * std::sin(2.0 * kPi * 1.3 * t) * share_of_neck;
+            yaw = heading + radians(6.0) * grazing * std::sin(2.0 * kPi * 0.3 * t + look_phase_) * share_of_neck;
+          }
+        }
         if (action == Action::Fly || action == Action::Glide) pitch = -0.3 * pitch_[f];
-        if (action == Action::Sit && creature_.plan != BodyPlan::Biped) pitch = 0.2 * pitch_[f];
+        if (action == Action::Sit && motion_plan_ != BodyPlan::Biped) pitch = 0.2 * pitch_[f];
         if (action == Action::Bow) pitch = 1.2 * pitch_[f];  // the head goes down with the bow
         // Targets are global: the manner's head carriage grows along the neck to its full value at the head.
         pitch += manner_.head_pitch * (kind == LimbKind::Head ? 1.0 : std::min(1.0, (index + 1.0) / neck_count));
@@ -168,7 +179,7 @@ void Synthesizer::pose_midline(int f, double t) {
         double sway_amount = radians(4.0) * tail_scale_;
         if (is_gait(action)) sway_amount = radians(action == Action::Walk ? 6.0 : 4.0) * tail_scale_;
         if (action == Action::Fly || action == Action::Glide) sway_amount = radians(2.0);
-        const bool abdomen = creature_.plan == BodyPlan::Hexapod || creature_.plan == BodyPlan::Spider;
+        const bool abdomen = motion_plan_ == BodyPlan::Hexapod || motion_plan_ == BodyPlan::Spider;
         if (abdomen) sway_amount = radians(1.5);  // an arthropod's abdomen barely sways
         if (!fish && !path_follower) {
           yaw += sway_amount * along * std::sin(2.0 * kPi * tail_sway_rate * t - lag + sway_phase_);
@@ -192,23 +203,23 @@ void Synthesizer::pose_midline(int f, double t) {
     }
 
     // Plan-specific strikes of the front body.
-    if (action == Action::Attack && (creature_.plan == BodyPlan::Snake || creature_.plan == BodyPlan::Centipede) &&
+    if (action == Action::Attack && (motion_plan_ == BodyPlan::Snake || motion_plan_ == BodyPlan::Centipede) &&
         s > 0.0) {
       const double front_share = std::clamp(s / std::max(m.front, 1e-9), 0.0, 1.0);
       const double coil = pulse(t, event_a_, event_b_, event_b_, event_b_ + 0.1);
       const double strike = pulse(t, event_b_, event_b_ + 0.1, event_c_, event_d_);
-      if (creature_.plan == BodyPlan::Snake && front_share > 0.35) {
+      if (motion_plan_ == BodyPlan::Snake && front_share > 0.35) {
         const double w = (front_share - 0.35) / 0.65;
         yaw += radians(55.0) * coil * std::sin(2.0 * kPi * w * 1.5) * (1.0 - 0.8 * strike) * (1.0 - w * 0.3);
         pitch = radians(35.0) * (coil + 0.6 * strike) * w * (1.0 - w) * 2.0;
         if (front_share > 0.9) pitch = -radians(15.0) * strike;
       }
-      if (creature_.plan == BodyPlan::Centipede && kind != LimbKind::Spine) {
+      if (motion_plan_ == BodyPlan::Centipede && kind != LimbKind::Spine) {
         pitch = radians(30.0) * coil - radians(25.0) * strike;
         yaw += radians(20.0) * side_sign(spec_.side) * strike;
       }
     }
-    if (creature_.plan == BodyPlan::Snake && kind != LimbKind::Spine && s > 0.6 * m.front &&
+    if (motion_plan_ == BodyPlan::Snake && kind != LimbKind::Spine && s > 0.6 * m.front &&
         action != Action::Attack) {
       pitch = radians(action == Action::Idle ? 8.0 : 4.0);  // head held a little off the ground
     }

@@ -25,6 +25,8 @@ std::string_view naming_name(NamingStyle naming) {
     case NamingStyle::Game: return "game";
     case NamingStyle::Biped3ds: return "biped3ds";
     case NamingStyle::Numbered: return "numbered";
+    case NamingStyle::Maya: return "maya";
+    case NamingStyle::Truebones: return "truebones";
   }
   return "unknown";
 }
@@ -183,7 +185,10 @@ MotionSpec zoo_clip_spec(const Creature& creature, const ZooOptions& options, in
     const bool airborne = spec.action == Action::Fly || spec.action == Action::Glide;
     spec.start_from_still = !airborne && random.chance(0.35);
     spec.stop_at_end = !airborne && random.chance(0.3);
-    if (spec.action == Action::Walk && random.chance(0.3)) {
+    const bool crab_gait = spec.action == Action::Walk || spec.action == Action::Run;
+    if (creature.plan == BodyPlan::Crab && crab_gait && random.chance(0.75)) {
+      spec.direction = random.chance(0.5) ? 90.0 : -90.0;  // crabs walk and run sideways
+    } else if (spec.action == Action::Walk && random.chance(0.3)) {
       const double directions[] = {180.0, 90.0, -90.0};  // backs up, sidesteps left, sidesteps right
       spec.direction = directions[random.below(3)];
     }

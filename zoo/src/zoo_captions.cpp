@@ -59,6 +59,10 @@ bool is_arthropod(BodyPlan plan) {
   return plan == BodyPlan::Hexapod || plan == BodyPlan::Spider || plan == BodyPlan::Centipede;
 }
 bool is_four_legged(BodyPlan plan) { return plan == BodyPlan::Quadruped || plan == BodyPlan::Dragon; }
+// Plant eaters, which graze.
+bool is_grazer(const Creature& creature) {
+  return creature.plan == BodyPlan::Ungulate || creature.species == "horse";
+}
 
 // Where a walk goes relative to the creature's facing (MotionSpec::direction).
 enum class Heading { Forward, Backward, Left, Right };
@@ -74,7 +78,8 @@ Heading travel_heading(const MotionSpec& spec) {
 // ---- verbs -----------------------------------------------------------------
 
 std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec, SpeedClass speed) {
-  const BodyPlan plan = creature.plan;
+  const BodyPlan own = creature.plan;
+  const BodyPlan plan = moves_like(own);  // a crab is worded as the spider it moves like, unless said otherwise
   const bool slow = speed == SpeedClass::Slow;
   const bool fast = speed == SpeedClass::Fast;
   std::vector<Verb> verbs;
@@ -92,6 +97,10 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
         if (is_arthropod(plan)) verbs.push_back({"scuttles sideways to the " + d, "scuttling sideways to the " + d});
         break;
       }
+      if (own == BodyPlan::Hopper) {
+        verbs = {{"hops", "hopping"}, {"hops along", "hopping along"}, {"moves in small hops", "moving in small hops"}};
+        break;
+      }
       verbs = {{"walks", "walking"}};
       if (is_arthropod(plan)) {
         verbs.push_back({"crawls", "crawling"});
@@ -101,12 +110,22 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
       if (plan == BodyPlan::Biped && !slow) verbs.push_back({"strides", "striding"});
       if (is_four_legged(plan) && slow) verbs.push_back({"plods", "plodding"});
       if ((is_four_legged(plan) || plan == BodyPlan::Biped) && slow) verbs.push_back({"ambles", "ambling"});
-      if (plan == BodyPlan::Bird) verbs.push_back({"struts", "strutting"});
+      if (own == BodyPlan::Bird || own == BodyPlan::GroundBird) verbs.push_back({"struts", "strutting"});
+      if (own == BodyPlan::Dinosaur) verbs.push_back({"stomps", "stomping"});
+      if ((own == BodyPlan::Dinosaur || own == BodyPlan::Elephant) && slow) verbs.push_back({"lumbers", "lumbering"});
       break;
     case Action::Trot:
+      if (own == BodyPlan::Elephant) {
+        verbs = {{"hurries along", "hurrying along"}, {"walks briskly", "walking briskly"}, {"trots", "trotting"}};
+        break;
+      }
       verbs = {{"trots", "trotting"}, {"jogs", "jogging"}, {"moves at a trot", "moving at a trot"}};
       break;
     case Action::Run:
+      if (own == BodyPlan::Hopper) {
+        verbs = {{"bounds along", "bounding along"}, {"hops", "hopping"}, {"races along in big hops", "racing along in big hops"}};
+        break;
+      }
       verbs = {{"runs", "running"}};
       if (fast) {
         verbs.push_back({"sprints", "sprinting"});
@@ -145,6 +164,9 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
         verbs = {{"sits down", "sitting down"},
                  {"sits down on the ground", "sitting down on the ground"},
                  {"takes a seat on the ground", "taking a seat on the ground"}};
+      } else if (own == BodyPlan::Hopper) {
+        verbs = {{"sits down", "sitting down"}, {"sits back on its tail", "sitting back on its tail"},
+                 {"settles down", "settling down"}};
       } else if (plan == BodyPlan::Bird) {
         verbs = {{"sits down", "sitting down"}, {"settles down", "settling down"}, {"hunkers down", "hunkering down"}};
       } else {
@@ -163,7 +185,17 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
       }
       break;
     case Action::Attack:
-      switch (plan) {
+      if (own == BodyPlan::Crab) {
+        verbs = {{"snaps its claws", "snapping its claws"}, {"raises its claws", "raising its claws"},
+                 {"threatens with its claws", "threatening with its claws"}};
+        break;
+      }
+      if (own == BodyPlan::Elephant) {
+        verbs = {{"raises its trunk and trumpets", "raising its trunk and trumpeting"}, {"trumpets", "trumpeting"},
+                 {"lunges with its trunk raised", "lunging with its trunk raised"}};
+        break;
+      }
+      switch (own == BodyPlan::Dinosaur ? own : plan) {  // a dinosaur bites, it does not peck
         case BodyPlan::Biped:
           verbs = {{"punches", "punching"}, {"throws a punch", "throwing a punch"}, {"strikes", "striking"}};
           break;
@@ -236,6 +268,16 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
       break;
     case Action::Kick:
       verbs = {{"kicks", "kicking"}, {"throws a kick", "throwing a kick"}, {"kicks forward", "kicking forward"}};
+      break;
+    case Action::Eat:
+      verbs = {{"eats", "eating"}, {"feeds", "feeding"}, {"lowers its head to eat", "lowering its head to eat"},
+               {"drinks", "drinking"}};
+      if (is_grazer(creature)) {
+        verbs.push_back({"grazes", "grazing"});
+        verbs.push_back({"crops the grass", "cropping the grass"});
+      } else {
+        verbs.push_back({"sniffs the ground", "sniffing the ground"});
+      }
       break;
   }
   return verbs;
@@ -357,7 +399,8 @@ std::string initial_posture(const Creature& creature, const MotionSpec& spec, Ph
 
 // Part-level detail: clauses that are true of this plan and action, as participles.
 std::vector<std::string> part_details(const Creature& creature, const MotionSpec& spec, Phraser& phraser) {
-  const BodyPlan plan = creature.plan;
+  const BodyPlan own = creature.plan;
+  const BodyPlan plan = moves_like(own);
   const bool arms = has_limb(creature, LimbKind::Arm);
   const bool wings = has_limb(creature, LimbKind::Wing);
   const bool tail = has_limb(creature, LimbKind::Tail);
@@ -365,6 +408,7 @@ std::vector<std::string> part_details(const Creature& creature, const MotionSpec
   const bool head = has_limb(creature, LimbKind::Head) || has_limb(creature, LimbKind::Neck);
   const bool fins = has_limb(creature, LimbKind::Fin);
   const bool legs = has_limb(creature, LimbKind::Leg);
+  const bool trunk = has_limb(creature, LimbKind::Trunk);
   std::vector<std::string> main;    // the most telling clause, one is chosen
   std::vector<std::string> extra;   // secondary motion, one may be added
   switch (spec.action) {
@@ -373,7 +417,12 @@ std::vector<std::string> part_details(const Creature& creature, const MotionSpec
     case Action::Trot:
     case Action::Gallop:
     case Action::Turn:
-      switch (plan) {
+      switch (own == BodyPlan::Hopper ? own : plan) {
+        case BodyPlan::Hopper:
+          main = {"pushing off with both feet together", "its feet landing side by side",
+                  "bouncing on its long hind feet"};
+          extra.push_back("its tail held out behind for balance");
+          break;
         case BodyPlan::Biped:
         case BodyPlan::Bird:
           main = {"alternating its legs", "stepping with one foot after the other"};
@@ -388,6 +437,7 @@ std::vector<std::string> part_details(const Creature& creature, const MotionSpec
         case BodyPlan::Spider:
           main = {"moving its legs in waves from back to front", "its legs stepping in a wave from back to front",
                   "each leg stepping just after the one behind it"};
+          if (own == BodyPlan::Crab) extra.push_back("its claws held up in front");
           break;
         case BodyPlan::Centipede:
           main = {"its many legs rippling in waves from back to front", "moving its legs in waves from back to front"};
@@ -407,6 +457,7 @@ std::vector<std::string> part_details(const Creature& creature, const MotionSpec
           break;
       }
       if (tail && plan != BodyPlan::Centipede && !is_arthropod(plan)) extra.push_back("its tail swaying behind it");
+      if (trunk) extra.push_back("its trunk swinging");
       break;
     case Action::Slither:
       main = {"throwing its body into s-shaped curves", "undulating from side to side", "its body following the path of its head"};
@@ -497,8 +548,21 @@ std::vector<std::string> part_details(const Creature& creature, const MotionSpec
               "standing on one leg as it kicks"};
       extra.push_back("its arms out for balance");
       break;
+    case Action::Eat:
+      main = {"its head down to the ground", "its muzzle close to the ground", "bending its neck down to the ground"};
+      if (jaw) extra.push_back("chewing");
+      extra.push_back("then raising its head again");
+      break;
     case Action::Attack:
-      switch (plan) {
+      if (own == BodyPlan::Crab) {
+        main = {"lifting its claws high", "its claws raised and spread wide"};
+        break;
+      }
+      if (trunk) {
+        main = {"curling its trunk up high", "lifting its trunk over its head"};
+        break;
+      }
+      switch (own == BodyPlan::Dinosaur ? own : plan) {
         case BodyPlan::Biped:
           main = {"twisting its torso into the punch", "winding up first", "raising its guard first"};
           break;
@@ -581,7 +645,9 @@ std::string predicate(const Creature& creature, const MotionSpec& spec, const Ve
         return phraser.pick<std::string>({"punches with its " + s + " fist", "throws a " + s + " punch",
                                           "strikes with its " + s + " arm"});
       }
-      if (creature.plan == BodyPlan::Bird || verb.finite.find(' ') != std::string::npos) return verb.finite;
+      if (creature.plan == BodyPlan::Bird || creature.plan == BodyPlan::GroundBird || verb.finite.find(' ') != std::string::npos) {
+        return verb.finite;
+      }
       return verb.finite + " " + phraser.pick<std::string>({"forward", "at something in front of it"});
     case Action::TakeOff:
       return verb.finite + " " + phraser.pick<std::string>({"and climbs into the air", "and rises into the air, flying forward",
@@ -623,6 +689,7 @@ std::string predicate(const Creature& creature, const MotionSpec& spec, const Ve
     case Action::Idle:
     case Action::Clap:
     case Action::Bow:
+    case Action::Eat:
       return verb.finite;
     default:
       return travel_predicate(verb, spec, speed, phraser);

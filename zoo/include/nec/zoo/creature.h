@@ -32,14 +32,29 @@
 
 namespace nec::zoo {
 
-enum class BodyPlan { Biped, Quadruped, Hexapod, Spider, Snake, Bird, Fish, Dragon, Centipede };
-constexpr BodyPlan kAllBodyPlans[] = {BodyPlan::Biped, BodyPlan::Quadruped, BodyPlan::Hexapod,
-                                      BodyPlan::Spider, BodyPlan::Snake,     BodyPlan::Bird,
-                                      BodyPlan::Fish,  BodyPlan::Dragon,    BodyPlan::Centipede};
+enum class BodyPlan {
+  Biped, Quadruped, Hexapod, Spider, Snake, Bird, Fish, Dragon, Centipede,
+  Crab,        // eight walking legs and two claws on a wide shell; walks sideways
+  Ungulate,    // deer, goat, camel, giraffe: long legs on hooves, a long neck
+  Elephant,    // pillar legs, a heavy body, a trunk
+  GroundBird,  // flamingo, heron, chicken, ostrich: long legs and toes, a pecking neck, wings folded
+  Hopper,      // kangaroo, wallaby: long hind feet, small arms, a heavy tail; hops with both feet
+  Dinosaur,    // a two-legged dinosaur: body level over the hips, balanced by a long tail
+};
+constexpr BodyPlan kAllBodyPlans[] = {BodyPlan::Biped,    BodyPlan::Quadruped,  BodyPlan::Hexapod,
+                                      BodyPlan::Spider,   BodyPlan::Snake,      BodyPlan::Bird,
+                                      BodyPlan::Fish,     BodyPlan::Dragon,     BodyPlan::Centipede,
+                                      BodyPlan::Crab,     BodyPlan::Ungulate,   BodyPlan::Elephant,
+                                      BodyPlan::GroundBird, BodyPlan::Hopper,   BodyPlan::Dinosaur};
 
-std::string_view body_plan_name(BodyPlan plan);  // "biped", "quadruped", ..., "centipede"
+std::string_view body_plan_name(BodyPlan plan);  // "biped", "quadruped", ..., "ground_bird", "dinosaur"
 // Parses a name as printed by body_plan_name; false when unknown.
 bool parse_body_plan(std::string_view name, BodyPlan& plan);
+// The plan whose motion rules a plan's creatures move by (gait timing, knee directions, how the
+// body is carried): a crab moves as a spider does, an ungulate or an elephant as a quadruped,
+// a ground bird, a hopper or a two-legged dinosaur as a bird (a hopper with both feet together).
+// The first nine plans move by their own.
+BodyPlan moves_like(BodyPlan plan);
 
 // How joints are named (all styles must map to sensible canonical names via
 // nec::canonical_joint_name, except Numbered, which carries no meaning on purpose).
@@ -49,6 +64,8 @@ enum class NamingStyle {
   Game,      // "leg_l_01", "spine_02", "tail_05"
   Biped3ds,  // "Bip01 L Thigh", "Bip01 Spine1", "Bip01 Tail3"
   Numbered,  // "joint12"
+  Maya,      // "L_thigh_JNT", "C_spine_02_JNT", "R_leg_03_02_JNT"
+  Truebones, // "BN_Thigh_L", "BN_Spine02", "BN_Tail05" (as the Truebones zoo's rigs)
 };
 
 enum class RestPose {
@@ -57,7 +74,7 @@ enum class RestPose {
   Crouched,  // legs bent at every joint, body lowered
 };
 
-enum class LimbKind { Leg, Arm, Wing, Fin, Tail, Neck, Head, Spine, Antenna, Jaw };
+enum class LimbKind { Leg, Arm, Wing, Fin, Tail, Neck, Head, Spine, Antenna, Jaw, Trunk };
 
 std::string_view limb_kind_name(LimbKind kind);  // "leg", "arm", ...
 
@@ -66,7 +83,8 @@ std::string_view limb_kind_name(LimbKind kind);  // "leg", "arm", ...
 // Kinds by plan: the chain behind the root is the Tail (an insect's, spider's
 // or centipede's abdomen too); the chain from the root forward is the Spine
 // (root excluded); spider palps are Antennae, mandibles and fangs are Jaws
-// (paired); a quadruped's front Leg starts at the scapula ("LeftShoulder").
+// (paired); a quadruped's front Leg starts at the scapula ("LeftShoulder"); a
+// crab's claws are Arms; an elephant's trunk is a Trunk hanging from the head.
 struct Limb {
   LimbKind kind = LimbKind::Leg;
   Side side = Side::None;   // Left/Right for paired limbs, None on the midline

@@ -64,13 +64,15 @@ enum class Action {
   Bow,         // bends forward at the hips and straightens again
   Crouch,      // bends the knees and lowers the body, then stays low
   Kick,        // kicks forward with one leg (side), the arms out for balance
+  Eat,         // four-legged plans: lowers its head to the ground (the body tipping forward when the neck is
+               // short), grazes and chews, and looks up again
 };
 
 constexpr Action kAllActions[] = {Action::Idle,  Action::Walk,    Action::Trot,   Action::Run,     Action::Gallop,
                                   Action::Turn,  Action::Jump,    Action::Sit,    Action::LieDown, Action::Attack,
                                   Action::Slither, Action::Swim,  Action::Fly,    Action::Glide,   Action::TakeOff,
                                   Action::FlapWings, Action::Wave, Action::RaiseHands, Action::Point, Action::Clap,
-                                  Action::Bow,   Action::Crouch,  Action::Kick};
+                                  Action::Bow,   Action::Crouch,  Action::Kick,   Action::Eat};
 
 std::string_view action_name(Action action);  // "idle", "walk", ..., "lie_down", "take_off", "raise_hands"
 // Parses a name as printed by action_name; false when unknown.
@@ -83,14 +85,20 @@ bool is_gait(Action action);
 
 // Actions a body plan supports, in kAllActions order:
 //   biped      idle walk run turn jump sit attack wave raise_hands point clap bow crouch kick
-//   quadruped  idle walk trot gallop turn jump sit lie_down attack
+//   quadruped  idle walk trot gallop turn jump sit lie_down attack eat
 //   hexapod    idle walk run turn jump lie_down attack
 //   spider     idle walk run turn jump lie_down attack
 //   snake      idle attack slither
 //   bird       idle walk run jump sit attack fly glide take_off flap_wings
 //   fish       idle attack swim
-//   dragon     idle walk trot gallop turn sit lie_down attack fly glide take_off flap_wings
+//   dragon     idle walk trot gallop turn sit lie_down attack fly glide take_off flap_wings eat
 //   centipede  idle walk run attack
+//   crab       idle walk run turn lie_down attack
+//   ungulate   idle walk trot gallop turn jump lie_down eat
+//   elephant   idle walk trot turn lie_down attack
+//   ground_bird idle walk run jump sit attack flap_wings
+//   hopper     idle walk run jump sit               (walk and run hop with both feet)
+//   dinosaur   idle walk run sit attack
 std::vector<Action> supported_actions(BodyPlan plan);
 bool supports_action(BodyPlan plan, Action action);
 
@@ -112,7 +120,7 @@ struct MotionSpec {
   Action action = Action::Walk;
   double speed = 0.5;             // body lengths per second along the heading, e.g. 0.8; locomotion, Jump (0 = in place), TakeOff
   double turn_rate = 0.0;         // degrees per second, + = left (counter-clockwise seen from +Y); locomotion only
-  double direction = 0.0;         // Walk: degrees of travel from the facing, + = left: 180 backs up, 90 / -90
+  double direction = 0.0;         // Walk, Run: degrees of travel from the facing, + = left: 180 backs up, 90 / -90
                                   // sidestep to the left / right (then straight, at most 0.8 x the typical speed)
   bool start_from_still = false;  // locomotion: stands still first, then accelerates
   bool stop_at_end = false;       // locomotion: decelerates and stands still at the end
