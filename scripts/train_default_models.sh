@@ -14,6 +14,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${1:-out/default-models} out=${2:-models/default}
 nec=${NEC:-build/apps/nec}  # NEC=...: another nec binary (e.g. a copy, while build/ is rebuilt)
+steps=()                     # STEPS=N: every training ends at step N (a quick trial of the whole pipeline)
+[ -n "${STEPS:-}" ] && steps=(--steps "$STEPS")
 started=$SECONDS
 step() { echo; echo "== [$(( (SECONDS - started) / 60 )) min] $*"; }
 mkdir -p "$work"
@@ -33,14 +35,14 @@ done
   --hold-out-dataset zoo_held_out --creature cmu=person,cmu_free=person -o "$work/cache" --quiet
 
 step "skeleton encoder"
-"$nec" train owo --config configs/owo_default.json --data "$work/cache" --out "$work/owo" --threads 2 --force
+"$nec" train owo --config configs/owo_default.json --data "$work/cache" --out "$work/owo" --threads 2 --force "${steps[@]}"
 
 step "tokenizer and evaluator, side by side (1 thread each)"
 "$nec" train tat --config configs/tat_cpu.json --data "$work/cache" --owo "$work/owo" --out "$work/tat" \
-  --threads 1 --force > "$work/tat.log" 2>&1 &
+  --threads 1 --force "${steps[@]}" > "$work/tat.log" 2>&1 &
 tat=$!
 "$nec" train evaluator --config configs/evaluator_cpu.json --data "$work/cache" --owo "$work/owo" \
-  --out "$work/evaluator" --threads 1 --force > "$work/evaluator.log" 2>&1 &
+  --out "$work/evaluator" --threads 1 --force "${steps[@]}" > "$work/evaluator.log" 2>&1 &
 evaluator=$!
 wait $tat || { tail -n 20 "$work/tat.log"; exit 1; }
 wait $evaluator || { tail -n 20 "$work/evaluator.log"; exit 1; }
@@ -48,13 +50,13 @@ tail -n 3 "$work/tat.log" "$work/evaluator.log"
 
 step "GPT"
 "$nec" train gpt --config configs/gpt_cpu.json --data "$work/cache" --tat "$work/tat" --out "$work/gpt" \
-  --threads 2 --force
+  --threads 2 --force "${steps[@]}"
 
 step "diffusion model: the pose stage, then the motion stage on it"
 "$nec" train diffusion --stage pose --config configs/diffusion_pose_cpu.json --data "$work/cache" --owo "$work/owo" \
-  --out "$work/diffusion_pose" --threads 2 --force
+  --out "$work/diffusion_pose" --threads 2 --force "${steps[@]}"
 "$nec" train diffusion --stage motion --config configs/diffusion_motion_cpu.json --data "$work/cache" \
-  --pose "$work/diffusion_pose" --out "$work/diffusion" --threads 2 --force
+  --pose "$work/diffusion_pose" --out "$work/diffusion" --threads 2 --force "${steps[@]}"
 
 step "copy into $out (models only, no training state)"
 rm -rf "$out.tmp"

@@ -800,6 +800,71 @@ TEST_F(BipedGestures, BowCrouchAndKickMoveTheBodyOnPlantedFeet) {
   }
 }
 
+// Jumping jacks: the feet hop apart with the hands over the head, and back together; stretching puts both hands
+// above the head; dancing lifts each foot in turn and sways the hips from side to side.
+TEST_F(BipedGestures, JumpingJacksStretchAndDance) {
+  const Made jacks = make(Action::JumpingJacks, Side::None);
+  const int last = jacks.motion.motion.frame_count - 1;
+  const auto feet_apart = [&](const Made& m, int f) {
+    return std::abs(m.pose.position(f, foot(Side::Left)).x() - m.pose.position(f, foot(Side::Right)).x());
+  };
+  const double together = feet_apart(jacks, 0);
+  int spread_frames = 0, overhead_while_spread = 0;
+  for (int f = 0; f <= last; ++f) {
+    if (feet_apart(jacks, f) < together + 0.4 * person_.leg_length) continue;
+    ++spread_frames;
+    const bool overhead = jacks.pose.position(f, hand(Side::Left)).y() > jacks.pose.position(f, head()).y() &&
+                          jacks.pose.position(f, hand(Side::Right)).y() > jacks.pose.position(f, head()).y();
+    overhead_while_spread += overhead;
+  }
+  EXPECT_GT(spread_frames, 10) << "the feet land apart";
+  EXPECT_GT(overhead_while_spread, spread_frames / 2) << "with the hands over the head";
+  EXPECT_NEAR(feet_apart(jacks, last), together, 0.05 * person_.leg_length) << "and end together";
+  for (const LegTrack& leg : jacks.motion.legs) {
+    EXPECT_EQ(leg.stance, jacks.motion.legs.front().stance) << "both feet hop at once";
+  }
+
+  const Made stretch = make(Action::Stretch, Side::None);
+  const int t = middle(stretch);
+  for (Side side : {Side::Left, Side::Right}) {
+    EXPECT_GT(stretch.pose.position(t, hand(side)).y(), stretch.pose.position(t, head()).y());
+    EXPECT_LT(stretch.pose.position(last, hand(side)).y(), stretch.pose.position(last, shoulder(side)).y());
+  }
+
+  const Made dance = make(Action::Dance, Side::None);
+  double low = 1e9, high = -1e9;
+  for (int f = 0; f <= last; ++f) {
+    low = std::min(low, dance.pose.position(f, 0).x());
+    high = std::max(high, dance.pose.position(f, 0).x());
+  }
+  EXPECT_GT(high - low, 0.08 * person_.leg_length) << "the hips sway";
+  for (const LegTrack& leg : dance.motion.legs) {
+    EXPECT_GT(std::count(leg.stance.begin(), leg.stance.end(), 0), 10) << "each foot steps";
+  }
+  EXPECT_LT(foot_stats(person_, dance.motion).max_slip, kSlipTolerance * person_.leg_length);
+}
+
+// Shaking off: the body rolls quickly from side to side (several times a second), the feet planted.
+TEST(ZooMotion, ShakingRollsTheBodyQuicklyOnPlantedFeet) {
+  for (BodyPlan plan : {BodyPlan::Quadruped, BodyPlan::Ungulate, BodyPlan::Bird}) {
+    const Creature creature = make_creature(plan, 4);
+    const SynthesizedMotion made = synthesize_motion(creature, spec_for(creature, Action::Shake, 1.0, 0.0, 4));
+    const Motion& m = made.motion;
+    int crossings = 0;
+    double largest = 0.0, previous = 0.0;
+    for (int f = 0; f < m.frame_count; ++f) {
+      const Vec3 left = m.rotation(f, 0) * Vec3::UnitX();  // the body's left axis: tilted up or down by a roll
+      const double roll = std::asin(std::clamp(left.y(), -1.0, 1.0));
+      largest = std::max(largest, std::abs(roll));
+      if (f > 0 && (roll > 0.0) != (previous > 0.0) && std::abs(roll - previous) > 1e-6) ++crossings;
+      previous = roll;
+    }
+    EXPECT_GT(largest, 8.0 * kPi / 180.0) << body_plan_name(plan);
+    EXPECT_GE(crossings, 6) << body_plan_name(plan) << ": several shakes";
+    EXPECT_LT(foot_stats(creature, made).max_slip, kSlipTolerance * creature.leg_length) << body_plan_name(plan);
+  }
+}
+
 // Tail secondary motion lags: the phase of the tail tip's sway trails the base's.
 TEST(ZooMotion, TailSwaysWithPhaseLag) {
   const Creature creature = make_creature(BodyPlan::Dragon, 1);

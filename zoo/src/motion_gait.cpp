@@ -24,6 +24,8 @@ constexpr ActionName kActionNames[] = {
     {Action::FlapWings, "flap_wings"}, {Action::Wave, "wave"},     {Action::RaiseHands, "raise_hands"},
     {Action::Point, "point"},     {Action::Clap, "clap"},       {Action::Bow, "bow"},
     {Action::Crouch, "crouch"},   {Action::Kick, "kick"},       {Action::Eat, "eat"},
+    {Action::Shake, "shake"},     {Action::JumpingJacks, "jumping_jacks"}, {Action::Stretch, "stretch"},
+    {Action::Dance, "dance"},
 };
 
 double fraction(double x) { return x - std::floor(x); }
@@ -82,32 +84,32 @@ std::vector<Action> supported_actions(BodyPlan plan) {
   using A = Action;
   switch (plan) {
     case BodyPlan::Biped:
-      return {A::Idle, A::Walk,       A::Run,   A::Turn, A::Jump, A::Sit,    A::Attack,
-              A::Wave, A::RaiseHands, A::Point, A::Clap, A::Bow,  A::Crouch, A::Kick};
+      return {A::Idle, A::Walk,       A::Run,   A::Turn, A::Jump, A::Sit,    A::Attack,       A::Wave,
+              A::RaiseHands, A::Point, A::Clap, A::Bow, A::Crouch, A::Kick, A::JumpingJacks, A::Stretch, A::Dance};
     case BodyPlan::Quadruped:
-      return {A::Idle, A::Walk, A::Trot, A::Gallop, A::Turn, A::Jump, A::Sit, A::LieDown, A::Attack, A::Eat};
+      return {A::Idle, A::Walk, A::Trot, A::Gallop, A::Turn, A::Jump, A::Sit, A::LieDown, A::Attack, A::Eat, A::Shake};
     case BodyPlan::Hexapod:
     case BodyPlan::Spider:
       return {A::Idle, A::Walk, A::Run, A::Turn, A::Jump, A::LieDown, A::Attack};
     case BodyPlan::Snake:
       return {A::Idle, A::Attack, A::Slither};
     case BodyPlan::Bird:
-      return {A::Idle, A::Walk, A::Run, A::Jump, A::Sit, A::Attack, A::Fly, A::Glide, A::TakeOff, A::FlapWings};
+      return {A::Idle, A::Walk, A::Run, A::Jump, A::Sit, A::Attack, A::Fly, A::Glide, A::TakeOff, A::FlapWings, A::Shake};
     case BodyPlan::Fish:
       return {A::Idle, A::Attack, A::Swim};
     case BodyPlan::Dragon:
       return {A::Idle, A::Walk,   A::Trot, A::Gallop, A::Turn,    A::Sit,
-              A::LieDown, A::Attack, A::Fly, A::Glide, A::TakeOff, A::FlapWings, A::Eat};
+              A::LieDown, A::Attack, A::Fly, A::Glide, A::TakeOff, A::FlapWings, A::Eat, A::Shake};
     case BodyPlan::Centipede:
       return {A::Idle, A::Walk, A::Run, A::Attack};
     case BodyPlan::Crab:
       return {A::Idle, A::Walk, A::Run, A::Turn, A::LieDown, A::Attack};
     case BodyPlan::Ungulate:
-      return {A::Idle, A::Walk, A::Trot, A::Gallop, A::Turn, A::Jump, A::LieDown, A::Eat};
+      return {A::Idle, A::Walk, A::Trot, A::Gallop, A::Turn, A::Jump, A::LieDown, A::Eat, A::Shake};
     case BodyPlan::Elephant:
       return {A::Idle, A::Walk, A::Trot, A::Turn, A::LieDown, A::Attack};
     case BodyPlan::GroundBird:
-      return {A::Idle, A::Walk, A::Run, A::Jump, A::Sit, A::Attack, A::FlapWings};
+      return {A::Idle, A::Walk, A::Run, A::Jump, A::Sit, A::Attack, A::FlapWings, A::Shake};
     case BodyPlan::Hopper:
       return {A::Idle, A::Walk, A::Run, A::Jump, A::Sit};
     case BodyPlan::Dinosaur:

@@ -54,6 +54,18 @@ class Synthesizer {
   void assemble_frame(int f);
   void pose_wing(const Appendage& wing, int f, double t);
   void plan_feeding();
+  // Jumping jacks: where the clip is in the current jack.
+  struct JackPhase {
+    double air = 0.0;      // 0..1 through a hop while the feet are off the ground, 0 on it
+    double landing = 0.0;  // 0..1..0 over the stance after a hop (knees giving)
+    double spread = 0.0;   // 0 feet together and arms down, 1 feet apart and arms overhead
+  };
+  static constexpr double kJackSeconds = 1.0;     // one jack: a hop out and a hop in
+  static constexpr double kJackAirSeconds = 0.2;  // each hop's time in the air
+  static constexpr double kShakeRate = 4.5;       // shakes per second
+  static constexpr double kDanceBeat = 2.0;       // dance steps per second
+  int jack_count() const;
+  JackPhase jack_phase(double t) const;
   struct ArmGesture {
     double weight = 0.0;           // 0: the ordinary arm pose, 1: fully in the gesture
     Vec3 upper = -Vec3::UnitY();   // upper arm direction in the chest's heading frame

@@ -106,6 +106,24 @@ Synthesizer::ArmGesture Synthesizer::arm_gesture(const Appendage& arm, int f, do
       // Out to the sides for balance.
       g = {in_gesture, mirrored(0.6, -0.75, 0.15), mirrored(0.55, -0.45, 0.45)};
       break;
+    case Action::JumpingJacks: {
+      // Up over the head through the side: out at half way, overhead with the feet apart.
+      const double end = event_a_ + jack_count() * kJackSeconds;
+      const double angle = kPi * jack_phase(t).spread;  // from down (0) through the side to up
+      const Vec3 direction = mirrored(std::sin(angle), -std::cos(angle), 0.05);
+      g = {pulse(t, event_a_ - 0.2, event_a_, end, end + 0.2), direction, direction};
+      break;
+    }
+    case Action::Stretch:
+      g = {in_gesture, mirrored(0.15, 1.0, 0.05), mirrored(0.08, 1.0, 0.0)};
+      break;
+    case Action::Dance: {
+      // Each arm swings up in front on its own beat, bent at the elbow.
+      const double dancing = pulse(t, event_a_, event_a_ + 0.3, event_d_ - 0.3, event_d_);
+      const double lift = 0.5 + 0.5 * std::sin(kPi * kDanceBeat * (t - event_a_) + side * 0.5 * kPi);
+      g = {dancing, mirrored(0.45, -0.2 + 0.9 * lift, 0.6), mirrored(0.1, 0.5 + 0.5 * lift, 0.7)};
+      break;
+    }
     default:
       break;
   }

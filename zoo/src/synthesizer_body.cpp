@@ -61,6 +61,23 @@ void Synthesizer::plan_body() {
       event_d_ = std::max(event_c_, 0.95 * T);  // head up again
       plan_feeding();
       break;
+    case Action::Shake:
+      event_a_ = 0.25 * T;                      // starts to shake
+      event_b_ = event_a_ + 0.2 * k;            // shaking hard
+      event_d_ = std::min(0.88 * T, event_b_ + 1.6);  // still again
+      event_c_ = std::max(event_b_, event_d_ - 0.25 * k);
+      break;
+    case Action::JumpingJacks:
+    case Action::Dance:
+      event_a_ = 0.12 * T;                      // starts
+      event_d_ = 0.9 * T;                       // stops (jumping jacks: after the last whole jack)
+      break;
+    case Action::Stretch:
+      event_a_ = 0.12 * T;                      // the arms start up
+      event_b_ = event_a_ + 0.6 * k;            // overhead
+      event_d_ = 0.92 * T;                      // down again
+      event_c_ = std::max(event_b_, event_d_ - 0.6 * k);  // lowering starts
+      break;
     case Action::Kick:
       event_a_ = 0.25 * T;                      // the knee comes up
       event_b_ = event_a_ + 0.3 * k;            // the leg snaps out
@@ -244,6 +261,36 @@ void Synthesizer::plan_body() {
         y += 0.008 * r * breath;
         break;
       }
+      case Action::Shake: {
+        // The body rolls fast from side to side, braced on its legs.
+        const double shaking = pulse(t, event_a_, event_b_, event_c_, event_d_);
+        roll = radians(14.0) * shaking * std::sin(2.0 * kPi * kShakeRate * (t - event_a_));
+        y -= 0.04 * r * shaking;
+        break;
+      }
+      case Action::JumpingJacks: {
+        const JackPhase jack = jack_phase(t);
+        y += 0.07 * r * std::sin(kPi * jack.air) - 0.03 * r * jack.landing;
+        break;
+      }
+      case Action::Stretch: {
+        // Arches back with the arms up, then bends to one side and the other.
+        const double up = pulse(t, event_a_, event_b_, event_c_, event_d_);
+        const double lean = pulse(t, event_b_, event_b_ + 0.2, event_c_ - 0.2, event_c_);
+        pitch = radians(8.0) * up;
+        roll = radians(12.0) * lean * std::sin(2.0 * kPi * (t - event_b_) / std::max(event_c_ - event_b_, 1e-3));
+        y += 0.006 * r * breath;
+        break;
+      }
+      case Action::Dance: {
+        // Sways side to side over two beats, bounces on each, the hips turning with the sway.
+        const double dancing = pulse(t, event_a_, event_a_ + 0.3, event_d_ - 0.3, event_d_);
+        const double sway = std::sin(kPi * kDanceBeat * (t - event_a_));
+        local_offset.x() = 0.07 * r * sway * dancing;
+        yaw = radians(12.0) * sway * dancing;
+        y -= 0.04 * r * dancing * (0.5 + 0.5 * std::cos(2.0 * kPi * kDanceBeat * (t - event_a_)));
+        break;
+      }
       case Action::Eat: {
         const double down = pulse(t, event_a_, event_b_, event_c_, event_d_);
         y += 0.006 * r * breath - 0.05 * r * down;
@@ -377,6 +424,30 @@ void Synthesizer::plan_feeding() {
     feeding_joint_pitch_.push_back(elevation(after[i], after[i + 1]) - elevation(before[i], before[i + 1]));
   }
   feeding_pitch_ = pitch;
+}
+
+// Jumping jacks: jacks of kJackSeconds from event_a_, each a hop out (the feet apart) and a hop in, whole jacks
+// only, done by event_d_.
+int Synthesizer::jack_count() const {
+  return std::max(1, static_cast<int>(std::floor((event_d_ - event_a_) / kJackSeconds)));
+}
+
+Synthesizer::JackPhase Synthesizer::jack_phase(double t) const {
+  JackPhase phase;
+  const double half = 0.5 * kJackSeconds;
+  const double since = t - event_a_;
+  if (since < 0.0 || since >= jack_count() * kJackSeconds) return phase;
+  const int hop = static_cast<int>(std::floor(since / half));
+  const double in_hop = since - hop * half;
+  if (in_hop < kJackAirSeconds) {
+    phase.air = in_hop / kJackAirSeconds;
+  } else {
+    phase.landing = std::sin(kPi * (in_hop - kJackAirSeconds) / (half - kJackAirSeconds));
+  }
+  // The arms go up with the hop out and come down with the hop in.
+  const double out = hop % 2 == 0 ? std::min(1.0, in_hop / kJackAirSeconds) : 1.0 - std::min(1.0, in_hop / kJackAirSeconds);
+  phase.spread = smoothstep(out);
+  return phase;
 }
 
 }  // namespace nec::zoo::detail

@@ -73,6 +73,19 @@ std::vector<Swing> Synthesizer::leg_swings(size_t leg_index) const {
     case Action::Kick:
       if (leg.side == spec_.side && leg.pair == 0) swings.push_back({event_a_, event_d_, SwingStyle::Kick});
       break;
+    case Action::JumpingJacks:
+      for (int hop = 0; hop < 2 * jack_count(); ++hop) {
+        const double begin = event_a_ + hop * 0.5 * kJackSeconds;
+        swings.push_back({begin, begin + kJackAirSeconds, SwingStyle::Step});
+      }
+      break;
+    case Action::Dance:
+      // Step-touch: each foot lifts and sets down on every other beat, where the swaying hips put it.
+      for (int beat = leg.side == Side::Left ? 0 : 1; event_a_ + (beat + 1) / kDanceBeat <= event_d_; beat += 2) {
+        const double begin = event_a_ + beat / kDanceBeat;
+        swings.push_back({begin, begin + 0.5 / kDanceBeat, SwingStyle::Step});
+      }
+      break;
     default:
       break;
   }
@@ -181,6 +194,10 @@ void Synthesizer::plan_legs() {
         when = 0.5 * (begin + end);
       }
       holds[s] = neutral_foot(i, std::clamp(when, t_first, t_last));
+      if (spec_.action == Action::JumpingJacks && s % 2 == 1) {  // after a hop out: the feet apart
+        const LegRig& leg = rig_.legs[i];
+        holds[s].position += yaw_rotation(holds[s].yaw) * Vec3(side_sign(leg.side) * 0.3 * leg.reach, 0.0, 0.0);
+      }
     }
     size_t next = 0;  // first swing that has not ended
     for (int f = 0; f < total_; ++f) {

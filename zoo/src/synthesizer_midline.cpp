@@ -165,6 +165,10 @@ void Synthesizer::pose_midline(int f, double t) {
             yaw = heading + radians(6.0) * grazing * std::sin(2.0 * kPi * 0.3 * t + look_phase_) * share_of_neck;
           }
         }
+        if (action == Action::Shake) {  // the head whips round a little behind the body
+          const double shaking = pulse(t, event_a_, event_b_, event_c_, event_d_);
+          yaw += radians(18.0) * shaking * share_of_neck * std::sin(2.0 * kPi * kShakeRate * (t - event_a_) - 0.6 - 0.3 * index);
+        }
         if (action == Action::Fly || action == Action::Glide) pitch = -0.3 * pitch_[f];
         if (action == Action::Sit && motion_plan_ != BodyPlan::Biped) pitch = 0.2 * pitch_[f];
         if (action == Action::Bow) pitch = 1.2 * pitch_[f];  // the head goes down with the bow
@@ -183,6 +187,10 @@ void Synthesizer::pose_midline(int f, double t) {
         if (abdomen) sway_amount = radians(1.5);  // an arthropod's abdomen barely sways
         if (!fish && !path_follower) {
           yaw += sway_amount * along * std::sin(2.0 * kPi * tail_sway_rate * t - lag + sway_phase_);
+        }
+        if (action == Action::Shake) {  // the tail whips with the shake, lagging towards its tip
+          const double shaking = pulse(t, event_a_, event_b_, event_c_, event_d_);
+          yaw += radians(25.0) * shaking * along * std::sin(2.0 * kPi * kShakeRate * (t - event_a_) - lag);
         }
         // Tail carriage: follows the body pitch, raised when running, lowered when resting.
         double carriage = 0.0;

@@ -269,6 +269,27 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
     case Action::Kick:
       verbs = {{"kicks", "kicking"}, {"throws a kick", "throwing a kick"}, {"kicks forward", "kicking forward"}};
       break;
+    case Action::Shake:
+      if (plan == BodyPlan::Bird) {
+        verbs = {{"shakes its feathers", "shaking its feathers"}, {"ruffles its feathers", "ruffling its feathers"},
+                 {"shakes itself", "shaking itself"}};
+      } else {
+        verbs = {{"shakes itself", "shaking itself"}, {"shakes itself off", "shaking itself off"},
+                 {"shakes off water", "shaking off water"}, {"shakes its body", "shaking its body"}};
+      }
+      break;
+    case Action::JumpingJacks:
+      verbs = {{"does jumping jacks", "doing jumping jacks"}, {"does star jumps", "doing star jumps"},
+               {"does a set of jumping jacks", "doing a set of jumping jacks"}};
+      break;
+    case Action::Stretch:
+      verbs = {{"stretches", "stretching"}, {"stretches its arms over its head", "stretching its arms over its head"},
+               {"reaches up and stretches", "reaching up and stretching"}};
+      break;
+    case Action::Dance:
+      verbs = {{"dances", "dancing"}, {"dances in place", "dancing in place"}, {"grooves to the music", "grooving to the music"},
+               {"sways to the beat", "swaying to the beat"}};
+      break;
     case Action::Eat:
       verbs = {{"eats", "eating"}, {"feeds", "feeding"}, {"lowers its head to eat", "lowering its head to eat"},
                {"drinks", "drinking"}};
@@ -548,6 +569,23 @@ std::vector<std::string> part_details(const Creature& creature, const MotionSpec
               "standing on one leg as it kicks"};
       extra.push_back("its arms out for balance");
       break;
+    case Action::Shake:
+      main = {"its body twisting rapidly from side to side", "rolling its body quickly one way and the other"};
+      if (head) extra.push_back("its head whipping around");
+      if (tail) extra.push_back("its tail whipping from side to side");
+      break;
+    case Action::JumpingJacks:
+      main = {"jumping its feet apart and together", "hopping its legs out and in"};
+      extra.push_back("swinging its arms up over its head and down");
+      break;
+    case Action::Stretch:
+      main = {"reaching its arms high above its head", "its arms stretched straight up"};
+      extra.push_back("leaning to one side and then the other");
+      break;
+    case Action::Dance:
+      main = {"stepping from foot to foot", "swaying its hips from side to side", "bouncing to the beat"};
+      extra.push_back("swinging its arms");
+      break;
     case Action::Eat:
       main = {"its head down to the ground", "its muzzle close to the ground", "bending its neck down to the ground"};
       if (jaw) extra.push_back("chewing");
@@ -690,6 +728,10 @@ std::string predicate(const Creature& creature, const MotionSpec& spec, const Ve
     case Action::Clap:
     case Action::Bow:
     case Action::Eat:
+    case Action::Shake:
+    case Action::JumpingJacks:
+    case Action::Stretch:
+    case Action::Dance:
       return verb.finite;
     default:
       return travel_predicate(verb, spec, speed, phraser);

@@ -66,13 +66,18 @@ enum class Action {
   Kick,        // kicks forward with one leg (side), the arms out for balance
   Eat,         // four-legged plans: lowers its head to the ground (the body tipping forward when the neck is
                // short), grazes and chews, and looks up again
+  Shake,       // four-legged plans and birds: shakes itself off, the body rolling fast from side to side
+  JumpingJacks,  // bipeds: hops the feet apart and together, the arms swinging up over the head and down
+  Stretch,     // bipeds: reaches both arms up over the head, leans to one side and the other, lowers them
+  Dance,       // bipeds: steps from foot to foot to a beat, swaying and bouncing, the arms swinging
 };
 
 constexpr Action kAllActions[] = {Action::Idle,  Action::Walk,    Action::Trot,   Action::Run,     Action::Gallop,
                                   Action::Turn,  Action::Jump,    Action::Sit,    Action::LieDown, Action::Attack,
                                   Action::Slither, Action::Swim,  Action::Fly,    Action::Glide,   Action::TakeOff,
                                   Action::FlapWings, Action::Wave, Action::RaiseHands, Action::Point, Action::Clap,
-                                  Action::Bow,   Action::Crouch,  Action::Kick,   Action::Eat};
+                                  Action::Bow,   Action::Crouch,  Action::Kick,   Action::Eat,     Action::Shake,
+                                  Action::JumpingJacks, Action::Stretch, Action::Dance};
 
 std::string_view action_name(Action action);  // "idle", "walk", ..., "lie_down", "take_off", "raise_hands"
 // Parses a name as printed by action_name; false when unknown.
@@ -84,19 +89,20 @@ bool is_locomotion(Action action);
 bool is_gait(Action action);
 
 // Actions a body plan supports, in kAllActions order:
-//   biped      idle walk run turn jump sit attack wave raise_hands point clap bow crouch kick
-//   quadruped  idle walk trot gallop turn jump sit lie_down attack eat
+//   biped      idle walk run turn jump sit attack wave raise_hands point clap bow crouch kick jumping_jacks
+//              stretch dance
+//   quadruped  idle walk trot gallop turn jump sit lie_down attack eat shake
 //   hexapod    idle walk run turn jump lie_down attack
 //   spider     idle walk run turn jump lie_down attack
 //   snake      idle attack slither
-//   bird       idle walk run jump sit attack fly glide take_off flap_wings
+//   bird       idle walk run jump sit attack fly glide take_off flap_wings shake
 //   fish       idle attack swim
-//   dragon     idle walk trot gallop turn sit lie_down attack fly glide take_off flap_wings eat
+//   dragon     idle walk trot gallop turn sit lie_down attack fly glide take_off flap_wings eat shake
 //   centipede  idle walk run attack
 //   crab       idle walk run turn lie_down attack
-//   ungulate   idle walk trot gallop turn jump lie_down eat
+//   ungulate   idle walk trot gallop turn jump lie_down eat shake
 //   elephant   idle walk trot turn lie_down attack
-//   ground_bird idle walk run jump sit attack flap_wings
+//   ground_bird idle walk run jump sit attack flap_wings shake
 //   hopper     idle walk run jump sit               (walk and run hop with both feet)
 //   dinosaur   idle walk run sit attack
 std::vector<Action> supported_actions(BodyPlan plan);
