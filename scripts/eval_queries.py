@@ -20,7 +20,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-ZOO_CLIP = re.compile(r"c\d{3}_([a-z]+)_k\d+_([a-z_]+)\.bvh")
+ZOO_CLIP = re.compile(r"c\d{3}_([a-z_]+?)_k\d+_([a-z_]+)\.bvh")
 SEGMENTER_WORDS = {"stands": "idle", "walks": "walk", "trots": "trot", "runs": "run", "turns": "turn", "sits": "sit",
                    "lies": "lie_down", "jumps": "jump"}
 

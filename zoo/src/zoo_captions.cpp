@@ -40,6 +40,21 @@ std::string noun_phrase(const Creature& creature) {
   return (starts_with_vowel_sound(species) ? "an " : "a ") + species;
 }
 
+// What people call a creature when they do not name it: "someone", "an animal", "a creature".
+std::vector<std::string> generic_nouns(const Creature& creature) {
+  switch (moves_like(creature.plan)) {
+    case BodyPlan::Biped: return {"someone", "a figure", "a character"};
+    case BodyPlan::Quadruped: return {"an animal", "a four-legged animal"};
+    case BodyPlan::Bird: return creature.plan == BodyPlan::Dinosaur ? std::vector<std::string>{"a creature", "a reptile"}
+                                : creature.plan == BodyPlan::Hopper  ? std::vector<std::string>{"an animal", "a creature"}
+                                                                     : std::vector<std::string>{"a bird", "an animal"};
+    case BodyPlan::Snake: return {"a reptile", "a creature"};
+    case BodyPlan::Fish: return {"a sea creature", "a creature"};
+    case BodyPlan::Dragon: return {"a creature", "a monster"};
+    default: return {"a creature", "a critter", "a many-legged creature"};
+  }
+}
+
 int count_limbs(const Creature& creature, LimbKind kind) {
   int count = 0;
   for (const Limb& limb : creature.limbs) count += limb.kind == kind ? 1 : 0;
@@ -761,10 +776,17 @@ Captions caption_motion(const Creature& creature, const MotionSpec& spec, uint64
   // The manner: an adjective on the subject or an adverbial after the predicate, in every level.
   const std::string adjective = manner_adjective(spec.manner, phraser);
   const bool manner_on_subject = !adjective.empty() && phraser.chance(0.5);
-  const std::string subject =
-      manner_on_subject ? (starts_with_vowel_sound(adjective) ? "an " : "a ") + adjective + " " +
-                              plain_subject.substr(plain_subject.find(' ') + 1)
-                        : plain_subject;
+  const auto with_manner = [&](const std::string& noun) {  // "a dog" -> "a weary dog"
+    if (!manner_on_subject) return noun;
+    return (starts_with_vowel_sound(adjective) ? "an " : "a ") + adjective + " " + noun.substr(noun.find(' ') + 1);
+  };
+  const std::string subject = with_manner(plain_subject);
+  // A quarter of the short captions leave the species out, as people often do ("an animal trots", "someone
+  // waves"); drawn apart from the other choices so that those stay as they are.
+  Phraser naming(mix_seed(phrasing_seed, 0x6E0A));
+  const std::string generic = naming.chance(0.25) ? naming.pick(generic_nouns(creature)) : "";
+  const bool unnamed = !generic.empty() && (!manner_on_subject || generic.find(' ') != std::string::npos);
+  const std::string short_subject = unnamed ? with_manner(generic) : subject;  // not "a weary someone"
   const std::string adverbial =
       manner_on_subject ? "" : manner_adverbial(spec.manner, is_locomotion(spec.action), phraser);
 
@@ -772,7 +794,8 @@ Captions caption_motion(const Creature& creature, const MotionSpec& spec, uint64
   const Verb& verb = phraser.pick(verbs);
   Captions captions;
   // Short: the action only (and the manner).
-  captions.short_text = join({phraser.chance(0.7) ? subject + " " + verb.finite : subject + " is " + verb.participle,
+  captions.short_text = join({phraser.chance(0.7) ? short_subject + " " + verb.finite
+                                                 : short_subject + " is " + verb.participle,
                               adverbial},
                              " ");
 
