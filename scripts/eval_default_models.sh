@@ -4,7 +4,8 @@
 #  - generation by the GPT on new zoo creatures, one all-test cache per action family (locomotion, gestures,
 #    vertical: jump / sit / lie down, flight, other: idle / attack / eat / shake), every plan that has the
 #    family's actions and the hexapods (the plan the models never saw): R@3 mixed and within plan, FID,
-#    jitter, beside the real clips (scripts/eval_generation.sh, judged by the models' own evaluator);
+#    jitter (scripts/eval_generation.sh, judged by the models' own evaluator), beside the real and the
+#    tokenizer-reconstructed clips' R@3 (`nec eval retrieval`);
 #  - how much of the real clips' vertical range generated and tokenizer-reconstructed jumps, sits and lie-downs
 #    keep (scripts/vertical_range.sh);
 #  - generation on the test split of the training cache (the shared CMU takes the models never trained on
@@ -14,7 +15,7 @@
 #    baseline's.
 #   scripts/eval_default_models.sh MODELS TRAIN_CACHE OUT [BASELINE_MODELS]
 # CLIPS: at most this many clips per dataset and family (default 60); SAMPLES per caption (default 2).
-# Writes OUT/<family>/{zoo,cache,gpt/t2m.md}, OUT/vertical_range.md, OUT/train-test/t2m.md, OUT/queries*.md and
+# Writes OUT/<family>/{zoo,cache,gpt/t2m.md,retrieval.md}, OUT/vertical_range.md, OUT/train-test/t2m.md, OUT/queries*.md and
 # OUT/summary.md (every table, in that order).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -54,6 +55,8 @@ for entry in "${families[@]}"; do
   scripts/eval_generation.sh "$models/gpt" "$out/$family/cache" "$models/evaluator" "$out/$family/gpt" test \
     "$samples" "$clips" > "$out/$family/gpt.log"
   tail -n 40 "$out/$family/gpt/t2m.md"
+  "$nec" eval retrieval --data "$out/$family/cache" --evaluator "$models/evaluator" --tokenizer "$models/gpt/tat" \
+    | tee "$out/$family/retrieval.md"
 done
 
 step "vertical range of generated and reconstructed jumps, sits and lie-downs"
@@ -75,7 +78,7 @@ fi
 {
   for entry in "${families[@]}"; do
     family=${entry%%:*}
-    echo "## $family"; echo; cat "$out/$family/gpt/t2m.md"; echo
+    echo "## $family"; echo; cat "$out/$family/gpt/t2m.md"; echo; cat "$out/$family/retrieval.md"; echo
   done
   echo "## vertical range"; echo; cat "$out/vertical_range.md"; echo
   echo "## training cache, test split"; echo; cat "$out/train-test/t2m.md"; echo
