@@ -24,7 +24,7 @@ shared_cmu=${NEC_SHARED_CMU:-../shared/data/cmu}
 debian_cmu=/usr/share/assimp/models/BVH
 step "data: zoo (hexapods held out), Debian's CMU files and the shared CMU takes"
 [ -f "$shared_cmu/descriptions.csv" ] || { echo "no $shared_cmu/descriptions.csv (set NEC_SHARED_CMU)" >&2; exit 1; }
-"$nec" zoo --out "$work/zoo" --creatures 225 --clips-per-creature 10 --seed 11 --hold-out hexapod --quiet
+"$nec" zoo --out "$work/zoo" --creatures 225 --clips-per-creature 12 --seed 11 --hold-out hexapod --quiet
 # Debian's takes that the shared set holds too (01_01, another conversion) are left out: one take, one split.
 rm -rf "$work/cmu_debian" && mkdir -p "$work/cmu_debian"
 for take in "$debian_cmu"/*.bvh; do

@@ -170,9 +170,9 @@ TEST_F(Zoo, ClipSpecsCoverActionsSpeedsAndTurns) {
   ZooOptions options = small("unused");
   std::map<std::string, int> actions;
   int left = 0, right = 0, still_starts = 0;
-  for (int i = 0; i < 90; ++i) {
+  for (int i = 0; i < 150; ++i) {
     const Creature creature = make_creature(zoo_creature_plan(options, i), zoo_creature_seed(options, i));
-    for (int k = 0; k < 8; ++k) {
+    for (int k = 0; k < 12; ++k) {
       const MotionSpec spec = zoo_clip_spec(creature, options, k);
       EXPECT_TRUE(supports_action(creature.plan, spec.action));
       ++actions[std::string(body_plan_name(creature.plan)) + "/" + std::string(action_name(spec.action))];
@@ -184,6 +184,12 @@ TEST_F(Zoo, ClipSpecsCoverActionsSpeedsAndTurns) {
   size_t supported = 0;
   for (BodyPlan plan : kAllBodyPlans) supported += supported_actions(plan).size();
   EXPECT_EQ(actions.size(), supported);
+  for (BodyPlan plan : kAllBodyPlans) {
+    for (Action action : supported_actions(plan)) {
+      EXPECT_TRUE(actions.count(std::string(body_plan_name(plan)) + "/" + std::string(action_name(action))))
+          << body_plan_name(plan) << " never " << action_name(action);
+    }
+  }
   EXPECT_GT(left, 10);
   EXPECT_GT(right, 10);
   EXPECT_GT(still_starts, 10);

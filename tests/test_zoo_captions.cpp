@@ -350,6 +350,18 @@ TEST_F(ZooCaptions, NewPlansAreWordedAsWhatTheyAre) {
                                             "chicken", "ostrich", "kangaroo", "wallaby", "dinosaur", "tyrannosaurus"}));
 }
 
+// Getting up says so, and the long caption says where it starts from.
+TEST_F(ZooCaptions, GettingUpSaysUpAndWhereItStarts) {
+  for (const Case& c : *cases_) {
+    if (c.spec.action != Action::GetUp) continue;
+    for (uint64_t phrasing = 0; phrasing < 4; ++phrasing) {
+      const Captions captions = caption_motion(c.creature, c.spec, phrasing);
+      for (const std::string& line : captions.lines()) EXPECT_TRUE(has_any(line, {"up", "rises", "rising", "lift"})) << line;
+      EXPECT_TRUE(has_any(captions.long_text, {"lying", "sitting", "seated", "ground"})) << captions.long_text;
+    }
+  }
+}
+
 TEST(ZooCaptionsBasics, ManyPhrasingsAndDeterministic) {
   const Creature spider = make_creature(BodyPlan::Spider, 7);
   MotionSpec spec;

@@ -557,6 +557,35 @@ TEST(ZooMotion, EatingBringsTheMuzzleToTheGround) {
   }
 }
 
+// Getting up is lying down (sitting down, for plans that do not lie) played backwards: the same poses and foot
+// contacts in reverse order, low at first and standing at the end.
+TEST(ZooMotion, GettingUpIsLyingDownBackwards) {
+  for (BodyPlan plan : kAllBodyPlans) {
+    if (!supports_action(plan, Action::GetUp)) {
+      EXPECT_FALSE(supports_action(plan, Action::Sit) || supports_action(plan, Action::LieDown)) << body_plan_name(plan);
+      continue;
+    }
+    const Creature creature = make_creature(plan, 8);
+    const SynthesizedMotion up = synthesize_motion(creature, spec_for(creature, Action::GetUp, 1.0, 0.0, 8));
+    const SynthesizedMotion down =
+        synthesize_motion(creature, spec_for(creature, lowering_action(plan), 1.0, 0.0, 8));
+    EXPECT_EQ(up.spec.action, Action::GetUp);
+    const int last = up.motion.frame_count - 1;
+    ASSERT_EQ(last, down.motion.frame_count - 1);
+    for (int t = 0; t <= last; t += 7) {
+      for (int j = 0; j < creature.skeleton.joint_count(); ++j) {
+        EXPECT_TRUE(up.motion.rotation(t, j).isApprox(down.motion.rotation(last - t, j))) << body_plan_name(plan);
+      }
+      EXPECT_TRUE(up.motion.translation(t, 0).isApprox(down.motion.translation(last - t, 0)));
+    }
+    EXPECT_LT(up.motion.translation(0, 0).y(), up.motion.translation(last, 0).y() - 0.1 * creature.leg_length)
+        << body_plan_name(plan) << ": low at first, standing at the end";
+    for (size_t i = 0; i < up.legs.size(); ++i) {
+      EXPECT_TRUE(std::equal(up.legs[i].stance.begin(), up.legs[i].stance.end(), down.legs[i].stance.rbegin()));
+    }
+  }
+}
+
 // Height of a joint over a clip: its first frame and its highest.
 std::pair<double, double> first_and_highest(const Creature& creature, const SynthesizedMotion& made, int joint) {
   const Pose pose = forward_kinematics(creature.skeleton, made.motion);

@@ -25,7 +25,7 @@ constexpr ActionName kActionNames[] = {
     {Action::Point, "point"},     {Action::Clap, "clap"},       {Action::Bow, "bow"},
     {Action::Crouch, "crouch"},   {Action::Kick, "kick"},       {Action::Eat, "eat"},
     {Action::Shake, "shake"},     {Action::JumpingJacks, "jumping_jacks"}, {Action::Stretch, "stretch"},
-    {Action::Dance, "dance"},
+    {Action::Dance, "dance"},     {Action::GetUp, "get_up"},
 };
 
 double fraction(double x) { return x - std::floor(x); }
@@ -80,7 +80,9 @@ bool is_gait(Action action) {
          action == Action::Turn;
 }
 
-std::vector<Action> supported_actions(BodyPlan plan) {
+namespace {
+
+std::vector<Action> listed_actions(BodyPlan plan) {
   using A = Action;
   switch (plan) {
     case BodyPlan::Biped:
@@ -117,6 +119,17 @@ std::vector<Action> supported_actions(BodyPlan plan) {
   }
   return {A::Idle};
 }
+
+}  // namespace
+
+std::vector<Action> supported_actions(BodyPlan plan) {
+  std::vector<Action> actions = listed_actions(plan);
+  const auto has = [&](Action a) { return std::find(actions.begin(), actions.end(), a) != actions.end(); };
+  if (has(Action::Sit) || has(Action::LieDown)) actions.push_back(Action::GetUp);
+  return actions;
+}
+
+Action lowering_action(BodyPlan plan) { return supports_action(plan, Action::LieDown) ? Action::LieDown : Action::Sit; }
 
 std::string_view manner_name(Manner manner) {
   switch (manner) {

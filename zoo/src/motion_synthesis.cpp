@@ -176,6 +176,22 @@ SynthesizedMotion synthesize_motion(const Creature& creature, const MotionSpec& 
                                 std::string(action_name(spec.action)));
   }
   creature.skeleton.validate();
+  if (spec.action == Action::GetUp) {
+    // Lying down (or sitting down) played backwards: every pose and foot contact in reverse order.
+    MotionSpec lowering = spec;
+    lowering.action = lowering_action(creature.plan);
+    SynthesizedMotion made = synthesize_motion(creature, lowering);
+    Motion& m = made.motion;
+    for (int t = 0, u = m.frame_count - 1; t < u; ++t, --u) {
+      for (int j = 0; j < m.joint_count; ++j) {
+        std::swap(m.rotation(t, j), m.rotation(u, j));
+        std::swap(m.translation(t, j), m.translation(u, j));
+      }
+    }
+    for (LegTrack& leg : made.legs) std::reverse(leg.stance.begin(), leg.stance.end());
+    made.spec.action = Action::GetUp;
+    return made;
+  }
   const detail::Rig rig = detail::analyze(creature);
   const MotionSpec effective = detail::effective_spec(creature, rig, spec);
   detail::Synthesizer synthesizer(creature, rig, effective);

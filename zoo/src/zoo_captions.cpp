@@ -305,6 +305,16 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
       verbs = {{"dances", "dancing"}, {"dances in place", "dancing in place"}, {"grooves to the music", "grooving to the music"},
                {"sways to the beat", "swaying to the beat"}};
       break;
+    case Action::GetUp:
+      if (is_arthropod(plan)) {
+        verbs = {{"rises from the ground", "rising from the ground"},
+                 {"lifts its body off the ground", "lifting its body off the ground"},
+                 {"stands back up", "standing back up"}};
+      } else {
+        verbs = {{"gets up", "getting up"}, {"stands up", "standing up"}, {"rises to its feet", "rising to its feet"},
+                 {"gets back on its feet", "getting back on its feet"}};
+      }
+      break;
     case Action::Eat:
       verbs = {{"eats", "eating"}, {"feeds", "feeding"}, {"lowers its head to eat", "lowering its head to eat"},
                {"drinks", "drinking"}};
@@ -425,6 +435,12 @@ std::string initial_posture(const Creature& creature, const MotionSpec& spec, Ph
     if (plan == BodyPlan::Fish) return phraser.pick<std::string>({"already swimming", "already in motion"});
     if (spec.action == Action::Turn) return phraser.pick<std::string>({"already stepping", "already in motion"});
     return phraser.pick<std::string>({"already in motion", "already moving", is_gait(spec.action) ? "in mid-stride" : "on the move"});
+  }
+  if (spec.action == Action::GetUp) {
+    if (lowering_action(creature.plan) == Action::Sit) {
+      return phraser.pick<std::string>({"sitting at first", "from a sitting position", "starting seated"});
+    }
+    return phraser.pick<std::string>({"lying on the ground at first", "from lying down", "starting on the ground"});
   }
   if (plan == BodyPlan::Fish) return phraser.pick<std::string>({"initially hovering", "holding still in the water"});
   if (plan == BodyPlan::Snake) return phraser.pick<std::string>({"lying on the ground", "initially stretched out on the ground"});
@@ -601,6 +617,10 @@ std::vector<std::string> part_details(const Creature& creature, const MotionSpec
       main = {"stepping from foot to foot", "swaying its hips from side to side", "bouncing to the beat"};
       extra.push_back("swinging its arms");
       break;
+    case Action::GetUp:
+      main = {"pushing itself up with its legs", "straightening its legs"};
+      extra.push_back("then standing still");
+      break;
     case Action::Eat:
       main = {"its head down to the ground", "its muzzle close to the ground", "bending its neck down to the ground"};
       if (jaw) extra.push_back("chewing");
@@ -747,6 +767,7 @@ std::string predicate(const Creature& creature, const MotionSpec& spec, const Ve
     case Action::JumpingJacks:
     case Action::Stretch:
     case Action::Dance:
+    case Action::GetUp:
       return verb.finite;
     default:
       return travel_predicate(verb, spec, speed, phraser);

@@ -70,6 +70,8 @@ enum class Action {
   JumpingJacks,  // bipeds: hops the feet apart and together, the arms swinging up over the head and down
   Stretch,     // bipeds: reaches both arms up over the head, leans to one side and the other, lowers them
   Dance,       // bipeds: steps from foot to foot to a beat, swaying and bouncing, the arms swinging
+  GetUp,       // every plan that sits or lies down: lying (or, without LieDown, sitting) at first, then gets up
+               // and stands: that action played backwards
 };
 
 constexpr Action kAllActions[] = {Action::Idle,  Action::Walk,    Action::Trot,   Action::Run,     Action::Gallop,
@@ -77,7 +79,7 @@ constexpr Action kAllActions[] = {Action::Idle,  Action::Walk,    Action::Trot, 
                                   Action::Slither, Action::Swim,  Action::Fly,    Action::Glide,   Action::TakeOff,
                                   Action::FlapWings, Action::Wave, Action::RaiseHands, Action::Point, Action::Clap,
                                   Action::Bow,   Action::Crouch,  Action::Kick,   Action::Eat,     Action::Shake,
-                                  Action::JumpingJacks, Action::Stretch, Action::Dance};
+                                  Action::JumpingJacks, Action::Stretch, Action::Dance, Action::GetUp};
 
 std::string_view action_name(Action action);  // "idle", "walk", ..., "lie_down", "take_off", "raise_hands"
 // Parses a name as printed by action_name; false when unknown.
@@ -88,7 +90,7 @@ bool is_locomotion(Action action);
 // Whether the action is a legged gait with a phase pattern (walk, trot, run, gallop, turn).
 bool is_gait(Action action);
 
-// Actions a body plan supports, in kAllActions order:
+// Actions a body plan supports (get_up too wherever sit or lie_down is), in kAllActions order:
 //   biped      idle walk run turn jump sit attack wave raise_hands point clap bow crouch kick jumping_jacks
 //              stretch dance
 //   quadruped  idle walk trot gallop turn jump sit lie_down attack eat shake
@@ -107,6 +109,8 @@ bool is_gait(Action action);
 //   dinosaur   idle walk run sit attack
 std::vector<Action> supported_actions(BodyPlan plan);
 bool supports_action(BodyPlan plan, Action action);
+// The action GetUp plays backwards on a plan: LieDown where it has it, else Sit.
+Action lowering_action(BodyPlan plan);
 
 // How a creature carries itself while it moves or stands (locomotion, turning on the spot and idling only).
 enum class Manner {
