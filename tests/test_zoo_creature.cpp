@@ -404,7 +404,10 @@ TEST(ZooCreature, LeftAndRightMirrorExactly) {
 bool names_its_kind(LimbKind kind, const std::string& canonical) {
   auto has = [&](const char* word) { return canonical.find(word) != std::string::npos; };
   switch (kind) {
-    case LimbKind::Leg: return has("leg") || has("foot") || has("toe") || has("coxa") || has("shoulder") || has("hoof");
+    // (a primate walks on its arms: their words name its front legs)
+    case LimbKind::Leg:
+      return has("leg") || has("foot") || has("toe") || has("coxa") || has("shoulder") || has("hoof") || has("arm") ||
+             has("hand");
     case LimbKind::Arm: return has("arm") || has("hand") || has("shoulder") || has("claw");
     case LimbKind::Wing: return has("wing");
     case LimbKind::Fin: return has("fin");

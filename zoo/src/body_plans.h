@@ -178,5 +178,7 @@ void build_ground_bird(Body& body, SplitMix64& rng, RestPose pose);
 // body_plan_hopper_dinosaur.cpp
 void build_hopper(Body& body, SplitMix64& rng, RestPose pose);
 void build_dinosaur(Body& body, SplitMix64& rng, RestPose pose);
+// body_plan_primate.cpp
+void build_primate(Body& body, SplitMix64& rng, RestPose pose);
 
 }  // namespace nec::zoo::detail

@@ -149,6 +149,7 @@ std::string_view body_plan_name(BodyPlan plan) {
     case BodyPlan::GroundBird: return "ground_bird";
     case BodyPlan::Hopper: return "hopper";
     case BodyPlan::Dinosaur: return "dinosaur";
+    case BodyPlan::Primate: return "primate";
   }
   return "unknown";
 }
@@ -157,7 +158,8 @@ BodyPlan moves_like(BodyPlan plan) {
   switch (plan) {
     case BodyPlan::Crab: return BodyPlan::Spider;
     case BodyPlan::Ungulate:
-    case BodyPlan::Elephant: return BodyPlan::Quadruped;
+    case BodyPlan::Elephant:
+    case BodyPlan::Primate: return BodyPlan::Quadruped;
     case BodyPlan::GroundBird:
     case BodyPlan::Hopper:
     case BodyPlan::Dinosaur: return BodyPlan::Bird;
@@ -241,6 +243,7 @@ Creature make_creature(BodyPlan plan, uint64_t seed, const CreatureOptions& opti
     case BodyPlan::GroundBird: detail::build_ground_bird(body, rng, options.rest_pose); break;
     case BodyPlan::Hopper: detail::build_hopper(body, rng, options.rest_pose); break;
     case BodyPlan::Dinosaur: detail::build_dinosaur(body, rng, options.rest_pose); break;
+    case BodyPlan::Primate: detail::build_primate(body, rng, options.rest_pose); break;
   }
   SplitMix64 units = detail::stream(plan, seed, detail::Stream::Units);
   return detail::finish(plan, seed, options, std::move(body), units.chance(0.4) ? 100.0 : 1.0);

@@ -116,6 +116,8 @@ std::vector<Action> listed_actions(BodyPlan plan) {
       return {A::Idle, A::Walk, A::Run, A::Jump, A::Sit};
     case BodyPlan::Dinosaur:
       return {A::Idle, A::Walk, A::Run, A::Sit, A::Attack};
+    case BodyPlan::Primate:
+      return {A::Idle, A::Walk, A::Gallop, A::Turn, A::Sit, A::Attack};
   }
   return {A::Idle};
 }

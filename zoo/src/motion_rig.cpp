@@ -12,7 +12,8 @@
 namespace nec::zoo::detail {
 namespace {
 
-constexpr double kStandReach = 0.9;  // standing: hip to foot at 90% of the leg's reach
+constexpr double kStandReach = 0.9;         // standing: hip to foot at 90% of the leg's reach
+constexpr double kPillarStandReach = 0.97;  // an elephant stands on almost straight legs
 
 std::vector<Vec3> rest_positions(const Skeleton& skeleton) {
   Motion rest = Motion::rest(skeleton, 1, 30.0);
@@ -267,7 +268,7 @@ Rig analyze(const Creature& creature) {
   }
   rig.midline = analyze_midline(creature, rig.rest);
 
-  // Standing height: every usable leg reaches its neutral foot at kStandReach.
+  // Standing height: every usable leg reaches its neutral foot at kStandReach (an elephant's at kPillarStandReach).
   rig.stand_height = rig.rest_height;
   for (const LegRig& leg : rig.legs) {
     if (!leg.usable) continue;
@@ -275,7 +276,8 @@ Rig analyze(const Creature& creature) {
     const Vec3 tip = flat(rig.rest[leg.attach]) + leg.neutral_from_attach;
     const Vec3 end = tip - (leg.fixed_foot ? leg.foot_vector : Vec3::Zero());  // world y of the end is -foot.y
     const double horizontal = flat(end - leg.hip_rest).norm();
-    const double vertical = std::sqrt(std::max(0.0, std::pow(kStandReach * leg.reach, 2) - horizontal * horizontal));
+    const double stand_reach = creature.plan == BodyPlan::Elephant ? kPillarStandReach : kStandReach;
+    const double vertical = std::sqrt(std::max(0.0, std::pow(stand_reach * leg.reach, 2) - horizontal * horizontal));
     rig.stand_height = std::min(rig.stand_height, end.y() - leg.hip_rest.y() + vertical);
   }
   rig.stand_height = std::max(rig.stand_height, 0.3 * rig.rest_height);

@@ -177,7 +177,7 @@ void Synthesizer::plan_body() {
           y = stand + (0.45 * r - stand) * w;
         } else {
           // Hindquarters down, chest up on straight front legs.
-          const double hips = 0.4 * r;
+          const double hips = std::min(0.4 * r, 0.7 * stand);  // (a primate's reach is its arm's)
           y = stand + (hips - stand) * w;
           local_offset.z() = -0.1 * r * w;
           double chest_rise = 0.0;

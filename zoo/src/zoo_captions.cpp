@@ -44,7 +44,9 @@ std::string noun_phrase(const Creature& creature) {
 std::vector<std::string> generic_nouns(const Creature& creature) {
   switch (moves_like(creature.plan)) {
     case BodyPlan::Biped: return {"someone", "a figure", "a character"};
-    case BodyPlan::Quadruped: return {"an animal", "a four-legged animal"};
+    case BodyPlan::Quadruped:
+      if (creature.plan == BodyPlan::Primate) return {"an ape", "an animal"};
+      return {"an animal", "a four-legged animal"};
     case BodyPlan::Bird: return creature.plan == BodyPlan::Dinosaur ? std::vector<std::string>{"a creature", "a reptile"}
                                 : creature.plan == BodyPlan::Hopper  ? std::vector<std::string>{"an animal", "a creature"}
                                                                      : std::vector<std::string>{"a bird", "an animal"};
@@ -126,6 +128,10 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
       if (is_four_legged(plan) && slow) verbs.push_back({"plods", "plodding"});
       if ((is_four_legged(plan) || plan == BodyPlan::Biped) && slow) verbs.push_back({"ambles", "ambling"});
       if (own == BodyPlan::Bird || own == BodyPlan::GroundBird) verbs.push_back({"struts", "strutting"});
+      if (own == BodyPlan::Primate) {
+        verbs.push_back({"knuckle-walks", "knuckle-walking"});
+        verbs.push_back({"walks on its knuckles", "walking on its knuckles"});
+      }
       if (own == BodyPlan::Dinosaur) verbs.push_back({"stomps", "stomping"});
       if ((own == BodyPlan::Dinosaur || own == BodyPlan::Elephant) && slow) verbs.push_back({"lumbers", "lumbering"});
       break;
@@ -153,6 +159,10 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
       }
       break;
     case Action::Gallop:
+      if (own == BodyPlan::Primate) {
+        verbs = {{"runs on all fours", "running on all fours"}, {"charges", "charging"}, {"bounds", "bounding"}};
+        break;
+      }
       verbs = {{"gallops", "galloping"}, {"runs at a gallop", "running at a gallop"}, {"bounds", "bounding"}};
       break;
     case Action::Turn:
@@ -208,6 +218,10 @@ std::vector<Verb> action_verbs(const Creature& creature, const MotionSpec& spec,
       if (own == BodyPlan::Elephant) {
         verbs = {{"raises its trunk and trumpets", "raising its trunk and trumpeting"}, {"trumpets", "trumpeting"},
                  {"lunges with its trunk raised", "lunging with its trunk raised"}};
+        break;
+      }
+      if (own == BodyPlan::Primate) {
+        verbs = {{"lunges", "lunging"}, {"attacks", "attacking"}, {"swipes at something", "swiping at something"}};
         break;
       }
       switch (own == BodyPlan::Dinosaur ? own : plan) {  // a dinosaur bites, it does not peck

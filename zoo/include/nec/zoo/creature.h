@@ -40,18 +40,20 @@ enum class BodyPlan {
   GroundBird,  // flamingo, heron, chicken, ostrich: long legs and toes, a pecking neck, wings folded
   Hopper,      // kangaroo, wallaby: long hind feet, small arms, a heavy tail; hops with both feet
   Dinosaur,    // a two-legged dinosaur: body level over the hips, balanced by a long tail
+  Primate,     // chimpanzee, gorilla: knuckle-walks on its long arms (the front legs), no tail
 };
 constexpr BodyPlan kAllBodyPlans[] = {BodyPlan::Biped,    BodyPlan::Quadruped,  BodyPlan::Hexapod,
                                       BodyPlan::Spider,   BodyPlan::Snake,      BodyPlan::Bird,
                                       BodyPlan::Fish,     BodyPlan::Dragon,     BodyPlan::Centipede,
                                       BodyPlan::Crab,     BodyPlan::Ungulate,   BodyPlan::Elephant,
-                                      BodyPlan::GroundBird, BodyPlan::Hopper,   BodyPlan::Dinosaur};
+                                      BodyPlan::GroundBird, BodyPlan::Hopper,   BodyPlan::Dinosaur,
+                                      BodyPlan::Primate};
 
 std::string_view body_plan_name(BodyPlan plan);  // "biped", "quadruped", ..., "ground_bird", "dinosaur"
 // Parses a name as printed by body_plan_name; false when unknown.
 bool parse_body_plan(std::string_view name, BodyPlan& plan);
 // The plan whose motion rules a plan's creatures move by (gait timing, knee directions, how the
-// body is carried): a crab moves as a spider does, an ungulate or an elephant as a quadruped,
+// body is carried): a crab moves as a spider does, an ungulate, an elephant or a primate as a quadruped,
 // a ground bird, a hopper or a two-legged dinosaur as a bird (a hopper with both feet together).
 // The first nine plans move by their own.
 BodyPlan moves_like(BodyPlan plan);

@@ -107,6 +107,7 @@ bool is_gait(Action action);
 //   ground_bird idle walk run jump sit attack flap_wings shake
 //   hopper     idle walk run jump sit               (walk and run hop with both feet)
 //   dinosaur   idle walk run sit attack
+//   primate    idle walk gallop turn sit attack              (walks on its knuckles)
 std::vector<Action> supported_actions(BodyPlan plan);
 bool supports_action(BodyPlan plan, Action action);
 // The action GetUp plays backwards on a plan: LieDown where it has it, else Sit.
