@@ -34,7 +34,7 @@ step() { echo; echo "== [$(( (SECONDS - started) / 60 )) min] $*"; }
 families=(
   "locomotion:walk,trot,run,gallop,turn,slither,swim:"
   "gestures:wave,raise_hands,point,clap,bow,crouch,kick,jumping_jacks,stretch,dance:biped"
-  "vertical:jump,sit,lie_down:biped,quadruped,hexapod,spider,bird,dragon,crab,ungulate,elephant,ground_bird,hopper,dinosaur"
+  "vertical:jump,sit,lie_down:biped,quadruped,hexapod,spider,bird,dragon,crab,ungulate,elephant,ground_bird,hopper,dinosaur,primate"
   "flight:fly,glide,take_off,flap_wings:bird,dragon,ground_bird"
   "other:idle,attack,eat,shake:"
 )

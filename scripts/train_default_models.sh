@@ -9,7 +9,8 @@
 # 70 of them; the diffusion model's two stages 20); the data step under a minute. Writes
 # OUT_DIR/{gpt,evaluator,diffusion} (the GPT holds its tokenizer in gpt/tat, which holds its OwO encoder;
 # the diffusion model holds a copy of that encoder) without their training state; OUT_DIR/README.md
-# (kept) says how its numbers were measured.
+# (kept) says how its numbers were measured. Run again after a stop, it goes on where it stopped (finished
+# stages are skipped, an interrupted training resumes); remove WORK_DIR to start over.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${1:-out/default-models} out=${2:-models/default}
@@ -20,43 +21,60 @@ started=$SECONDS
 step() { echo; echo "== [$(( (SECONDS - started) / 60 )) min] $*"; }
 mkdir -p "$work"
 
+# Each stage runs once: a finished one (WORK/<stage>.done) is skipped and an interrupted training resumes from
+# its last checkpoint, so that running the script again after a stop goes on where it stopped.
+train() {  # train STAGE ARGS...: `nec train ARGS` into WORK/STAGE
+  local stage=$1 mode=--force
+  shift
+  if [ -f "$work/$stage.done" ]; then echo "$stage: trained before ($work/$stage.done)"; return 0; fi
+  [ -f "$work/$stage/training.json" ] && mode=--resume
+  "$nec" train "$@" --out "$work/$stage" "$mode" "${steps[@]}"
+  touch "$work/$stage.done"
+}
+
 shared_cmu=${NEC_SHARED_CMU:-../shared/data/cmu}
 debian_cmu=/usr/share/assimp/models/BVH
 step "data: zoo (hexapods held out), Debian's CMU files and the shared CMU takes"
 [ -f "$shared_cmu/descriptions.csv" ] || { echo "no $shared_cmu/descriptions.csv (set NEC_SHARED_CMU)" >&2; exit 1; }
-"$nec" zoo --out "$work/zoo" --creatures 225 --clips-per-creature 12 --seed 11 --hold-out hexapod --quiet
-# Debian's takes that the shared set holds too (01_01, another conversion) are left out: one take, one split.
-rm -rf "$work/cmu_debian" && mkdir -p "$work/cmu_debian"
-for take in "$debian_cmu"/*.bvh; do
-  [ -e "$shared_cmu/bvh/$(basename "$take")" ] || ln -s "$take" "$work/cmu_debian/"
-done
-"$nec" prepare zoo="$work/zoo/seen" zoo_held_out="$work/zoo/held_out" cmu="$work/cmu_debian" \
-  cmu_free="$shared_cmu/bvh" --descriptions "$shared_cmu/descriptions.csv" \
-  --hold-out-dataset zoo_held_out --creature cmu=person,cmu_free=person -o "$work/cache" --quiet
+if [ ! -f "$work/data.done" ]; then
+  rm -rf "$work/zoo" "$work/zoo_more"  # `nec zoo` adds to a folder: start from empty ones
+  "$nec" zoo --out "$work/zoo" --creatures 225 --clips-per-creature 12 --seed 11 --hold-out hexapod --quiet
+  # More of the creatures users ask for most (people, four-legged animals, birds): a plan's clips are spread
+  # over all its actions, and a person has nineteen.
+  "$nec" zoo --out "$work/zoo_more" --plans biped,quadruped,bird --creatures 48 --clips-per-creature 12 --seed 12 \
+    --quiet
+  # Debian's takes that the shared set holds too (01_01, another conversion) are left out: one take, one split.
+  rm -rf "$work/cmu_debian" && mkdir -p "$work/cmu_debian"
+  for take in "$debian_cmu"/*.bvh; do
+    [ -e "$shared_cmu/bvh/$(basename "$take")" ] || ln -s "$take" "$work/cmu_debian/"
+  done
+  "$nec" prepare zoo="$work/zoo/seen" zoo_more="$work/zoo_more/seen" zoo_held_out="$work/zoo/held_out" \
+    cmu="$work/cmu_debian" cmu_free="$shared_cmu/bvh" --descriptions "$shared_cmu/descriptions.csv" \
+    --hold-out-dataset zoo_held_out --creature cmu=person,cmu_free=person -o "$work/cache" --quiet
+  touch "$work/data.done"
+fi
 
 step "skeleton encoder"
-"$nec" train owo --config configs/owo_default.json --data "$work/cache" --out "$work/owo" --threads 2 --force "${steps[@]}"
+train owo owo --config configs/owo_default.json --data "$work/cache" --threads 2
 
 step "tokenizer and evaluator, side by side (1 thread each)"
-"$nec" train tat --config configs/tat_cpu.json --data "$work/cache" --owo "$work/owo" --out "$work/tat" \
-  --threads 1 --force "${steps[@]}" > "$work/tat.log" 2>&1 &
+train tat tat --config configs/tat_cpu.json --data "$work/cache" --owo "$work/owo" --threads 1 > "$work/tat.log" 2>&1 &
 tat=$!
-"$nec" train evaluator --config configs/evaluator_cpu.json --data "$work/cache" --owo "$work/owo" \
-  --out "$work/evaluator" --threads 1 --force "${steps[@]}" > "$work/evaluator.log" 2>&1 &
+train evaluator evaluator --config configs/evaluator_cpu.json --data "$work/cache" --owo "$work/owo" --threads 1 \
+  > "$work/evaluator.log" 2>&1 &
 evaluator=$!
 wait $tat || { tail -n 20 "$work/tat.log"; exit 1; }
 wait $evaluator || { tail -n 20 "$work/evaluator.log"; exit 1; }
 tail -n 3 "$work/tat.log" "$work/evaluator.log"
 
 step "GPT"
-"$nec" train gpt --config configs/gpt_cpu.json --data "$work/cache" --tat "$work/tat" --out "$work/gpt" \
-  --threads 2 --force "${steps[@]}"
+train gpt gpt --config configs/gpt_cpu.json --data "$work/cache" --tat "$work/tat" --threads 2
 
 step "diffusion model: the pose stage, then the motion stage on it"
-"$nec" train diffusion --stage pose --config configs/diffusion_pose_cpu.json --data "$work/cache" --owo "$work/owo" \
-  --out "$work/diffusion_pose" --threads 2 --force "${steps[@]}"
-"$nec" train diffusion --stage motion --config configs/diffusion_motion_cpu.json --data "$work/cache" \
-  --pose "$work/diffusion_pose" --out "$work/diffusion" --threads 2 --force "${steps[@]}"
+train diffusion_pose diffusion --stage pose --config configs/diffusion_pose_cpu.json --data "$work/cache" \
+  --owo "$work/owo" --threads 2
+train diffusion diffusion --stage motion --config configs/diffusion_motion_cpu.json --data "$work/cache" \
+  --pose "$work/diffusion_pose" --threads 2
 
 step "copy into $out (models only, no training state)"
 rm -rf "$out.tmp"
