@@ -2,11 +2,13 @@
 #include "command_line.h"
 #include "commands.h"
 
+#include "nec/motion/error.h"
 #include "nec/zoo/zoo.h"
 
 #include <fmt/format.h>
 
 #include <chrono>
+#include <filesystem>
 
 namespace nec::app {
 namespace {
@@ -79,6 +81,7 @@ int run_zoo(int argc, char** argv) {
   cli.option("--seconds", "SECONDS", "4", "clip length");
   cli.option("--fps", "FPS", "30", "frames per second");
   cli.flag("--quiet", "print only the summary");
+  cli.flag("--force", "replace DIR when it holds anything (without it, a folder that is not empty is refused)");
   cli.example("nec zoo --out zoo --creatures 9 --clips-per-creature 4 --seed 1 --hold-out spider,dragon");
   cli.example("nec zoo --out gestures --plans biped --actions wave,clap,kick --creatures 2 --clips-per-creature 3");
   if (!cli.parse(argc, argv)) return 0;
@@ -97,6 +100,13 @@ int run_zoo(int argc, char** argv) {
     options.validate();
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
+  }
+  // A zoo written over another would mix their clips (different creatures keep their files): refuse, or replace.
+  const std::filesystem::path out_dir(options.out_dir);
+  if (std::filesystem::exists(out_dir) &&
+      (!std::filesystem::is_directory(out_dir) || !std::filesystem::is_empty(out_dir))) {
+    if (!cli.is_set("--force")) throw InputError(options.out_dir, 0, "is not empty; pass --force to replace it");
+    std::filesystem::remove_all(out_dir);
   }
   const bool quiet = cli.is_set("--quiet");
   const auto start = std::chrono::steady_clock::now();

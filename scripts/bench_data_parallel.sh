@@ -30,7 +30,7 @@ cat > "$work/owo.json" <<'JSON'
 JSON
 
 for plan in biped centipede; do
-  "$nec" zoo --out "$work/zoo_$plan" --plans "$plan" --creatures 4 --clips-per-creature 8 --seconds 4 --seed 2 --quiet
+  "$nec" zoo --out "$work/zoo_$plan" --plans "$plan" --creatures 4 --clips-per-creature 8 --seconds 4 --seed 2 --quiet --force
   "$nec" prepare "zoo=$work/zoo_$plan/seen" --val 0 --test 0 -o "$work/cache_$plan" --quiet > /dev/null
 done
 "$nec" train owo --config "$work/owo.json" --data "$work/cache_biped" --out "$work/owo" --threads 2 > /dev/null

@@ -27,6 +27,6 @@ echo "== nec demo ${extra[*]}"
 if [ -n "${NEC_TAT_MODEL:-}" ]; then
   echo
   echo "== transfers with $NEC_TAT_MODEL"
-  "$nec" zoo --out out/demo/transfer_zoo --creatures 9 --clips-per-creature 4 --seed 1 --quiet
+  "$nec" zoo --out out/demo/transfer_zoo --creatures 9 --clips-per-creature 4 --seed 1 --quiet --force
   scripts/transfers.sh "$NEC_TAT_MODEL" out/demo/transfer_zoo out/demo/transfers
 fi

@@ -45,7 +45,7 @@ for entry in "${families[@]}"; do
   [ -n "$plans" ] && plan_args=(--plans "$plans")
   case ",${plans:-hexapod}," in *,hexapod,*) hold=(--hold-out hexapod) ;; esac
   "$nec" zoo --out "$out/$family/zoo" --creatures 60 --clips-per-creature 4 --seed 99 --actions "$actions" \
-    "${plan_args[@]}" "${hold[@]}" --quiet
+    "${plan_args[@]}" "${hold[@]}" --quiet --force
   inputs=(zoo="$out/$family/zoo/seen") held=zoo
   if [ -d "$out/$family/zoo/held_out" ]; then
     inputs+=(zoo_held_out="$out/$family/zoo/held_out")

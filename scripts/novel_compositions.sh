@@ -22,7 +22,7 @@ mkdir -p "$out"
 # The reference: a zoo of every plan, all of it a test split, large enough that each short caption
 # ("a ... leaps") has a few dozen clips.
 if [ ! -f "$out/reference/cache/manifest.json" ]; then
-  "$nec" zoo --out "$out/reference/zoo" --creatures 180 --clips-per-creature 8 --seed 123 --quiet
+  "$nec" zoo --out "$out/reference/zoo" --creatures 180 --clips-per-creature 8 --seed 123 --quiet --force
   "$nec" prepare zoo="$out/reference/zoo/seen" --hold-out-dataset zoo -o "$out/reference/cache" --quiet > /dev/null
 fi
 

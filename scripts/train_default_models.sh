@@ -37,12 +37,11 @@ debian_cmu=/usr/share/assimp/models/BVH
 step "data: zoo (hexapods held out), Debian's CMU files and the shared CMU takes"
 [ -f "$shared_cmu/descriptions.csv" ] || { echo "no $shared_cmu/descriptions.csv (set NEC_SHARED_CMU)" >&2; exit 1; }
 if [ ! -f "$work/data.done" ]; then
-  rm -rf "$work/zoo" "$work/zoo_more"  # `nec zoo` adds to a folder: start from empty ones
-  "$nec" zoo --out "$work/zoo" --creatures 225 --clips-per-creature 12 --seed 11 --hold-out hexapod --quiet
+  "$nec" zoo --out "$work/zoo" --creatures 225 --clips-per-creature 12 --seed 11 --hold-out hexapod --quiet --force
   # More of the creatures users ask for most (people, four-legged animals, birds): a plan's clips are spread
   # over all its actions, and a person has nineteen.
   "$nec" zoo --out "$work/zoo_more" --plans biped,quadruped,bird --creatures 48 --clips-per-creature 12 --seed 12 \
-    --quiet
+    --quiet --force
   # Debian's takes that the shared set holds too (01_01, another conversion) are left out: one take, one split.
   rm -rf "$work/cmu_debian" && mkdir -p "$work/cmu_debian"
   for take in "$debian_cmu"/*.bvh; do

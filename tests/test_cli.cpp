@@ -157,6 +157,21 @@ TEST_F(Cli, ZooListsPlansAndActionsAndDrawsOnlyTheAskedOnes) {
     EXPECT_TRUE(contains(name, "_wave") || contains(name, "_kick")) << name;
   }
   EXPECT_EQ(clips, 8);
+  // Another zoo is not written over this one (their clips would mix) unless --force replaces it.
+  const std::string again = "zoo --out " + path("z") + " --plans quadruped --creatures 1 --clips-per-creature 1 --quiet";
+  const CommandResult refused = run_nec(again);
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_TRUE(contains(refused.output, "is not empty; pass --force to replace it")) << refused.output;
+  const CommandResult replaced = run_nec(again + " --force");
+  ASSERT_EQ(replaced.exit_code, 0) << replaced.output;
+  int left = 0, quadrupeds = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(path("z"))) {
+    if (entry.path().extension() != ".bvh") continue;
+    ++left;
+    quadrupeds += contains(entry.path().stem().string(), "quadruped");
+  }
+  EXPECT_EQ(left, 1) << "only the new zoo's clip";
+  EXPECT_EQ(quadrupeds, 1);
   const CommandResult unknown = run_nec("zoo --out " + path("u") + " --actions moonwalk");
   EXPECT_EQ(unknown.exit_code, 2);
   EXPECT_TRUE(contains(unknown.output, "unknown action 'moonwalk'")) << unknown.output;
