@@ -14,8 +14,10 @@
 #include <fmt/format.h>
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -42,6 +44,32 @@ std::vector<std::string> output_paths(const std::string& out, int samples) {
   return paths;
 }
 
+// --seconds: "auto" (0 for every segment), one length for every segment, or one per segment ("3,2,4"); 0 = auto.
+std::vector<double> segment_seconds(const std::string& value, size_t segments) {
+  std::vector<double> seconds;
+  size_t begin = 0;
+  while (begin <= value.size()) {
+    const size_t end = std::min(value.find(',', begin), value.size());
+    const std::string item = value.substr(begin, end - begin);
+    double length = 0;
+    if (item != "auto") {
+      char* rest = nullptr;
+      length = std::strtod(item.c_str(), &rest);
+      if (item.empty() || *rest != '\0' || !(length > 0 && length <= kMaxSeconds)) {
+        throw InputError("--seconds", 0, fmt::format("'{}' is not a length in (0, {}] seconds or auto", item, kMaxSeconds));
+      }
+    }
+    seconds.push_back(length);
+    begin = end + 1;
+  }
+  if (seconds.size() == 1) return std::vector<double>(segments, seconds.front());
+  if (seconds.size() != segments) {
+    throw InputError("--seconds", 0, fmt::format("gives {} lengths for {} captions: give one for all, or one per caption",
+                                                  seconds.size(), segments));
+  }
+  return seconds;
+}
+
 // Options of one kind of model, refused with another when changed from their defaults {option, default}.
 void refuse_options(const CommandLine& cli, const std::vector<std::pair<std::string, std::string>>& options,
                     const std::string& kind) {
@@ -64,9 +92,10 @@ int run_generate(int argc, char** argv) {
   cli.positional("CAPTION", "what the motion shows, e.g. \"a dog walks forward\"; several: one segment each", true, true);
   cli.option("--skeleton", "SKELETON", "", "BVH file or rigged asset to generate for (its motion is not used)", true);
   cli.option("-o", "OUT", "", "output: .bvh, or .glb (a copy of the skeleton's asset with the motion added)", true);
-  cli.option("--model", "CKPT", "", "GPT (`nec train gpt`) or diffusion (`nec train diffusion`) checkpoint;\n"
-                                    "default: models/default/gpt");
-  cli.option("--seconds", "S", "auto", "length of each segment (up to 60); auto: the GPT ends it (diffusion: one window)");
+  cli.option("--model", "CKPT", "", "GPT (`nec train gpt`) or diffusion (`nec train diffusion`) checkpoint, or\n"
+                                    "gpt / diffusion: the default models' one; default: models/default/gpt");
+  cli.option("--seconds", "S", "auto", "length of each segment (up to 60), or one per caption: 3,2,4; auto: the GPT\n"
+                                       "ends it (diffusion: one window)");
   cli.option("--samples", "K", "1", "how many motions to write");
   cli.option("--seed", "N", "0", "sample i draws from seed + i");
   cli.option("--guidance", "G", "2.5", "classifier-free guidance scale (1: none)");
@@ -82,7 +111,7 @@ int run_generate(int argc, char** argv) {
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
   cli.option("--threads", "N", "0", "torch threads; 0 = all cores");
   cli.example("nec generate \"a dragon flaps its wings and takes off\" --skeleton dragon.bvh --model runs/gpt -o out.bvh");
-  cli.example("nec generate \"a dog walks forward\" \"then it sits down\" --skeleton dog.bvh --model runs/gpt -o dog.bvh --seconds 3");
+  cli.example("nec generate \"a dog walks forward\" \"then it sits down\" --skeleton dog.bvh --model runs/gpt -o dog.bvh --seconds 3,2");
   cli.example("nec generate \"a spider walks forward quickly\" --skeleton spider.bvh --model runs/diffusion -o spider.bvh --samples 4 --view spider.html");
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
@@ -91,15 +120,12 @@ int run_generate(int argc, char** argv) {
   const uint64_t seed = static_cast<uint64_t>(cli.integer("--seed"));
   const int samples = cli.integer("--samples");
   if (samples < 1 || samples > 256) throw UsageError("--samples must be in 1..256");
-  double seconds = 0;
-  if (cli.value("--seconds") != "auto") {
-    seconds = cli.number("--seconds");
-    if (!(seconds > 0 && seconds <= kMaxSeconds)) {
-      throw InputError("--seconds", 0, fmt::format("{} is out of range: give a length in (0, {}] seconds, or auto",
-                                                    cli.value("--seconds"), kMaxSeconds));
-    }
-  }
-  const std::string model = model_or_default(cli.value("--model"), "gpt", "--model");
+  const std::vector<std::string>& captions = cli.positionals("CAPTION");
+  const std::vector<double> seconds = segment_seconds(cli.value("--seconds"), captions.size());
+  // "gpt" and "diffusion" name the default models unless a folder of that name is there.
+  std::string model = cli.value("--model");
+  if ((model == "gpt" || model == "diffusion") && !fs::exists(model)) model = model_or_default("", model, "--model " + model);
+  model = model_or_default(model, "gpt", "--model");
   const bool is_diffusion = checkpoint_format(model) == diffusion::kDiffusionCheckpointFormat;
   gpt::SamplingOptions gpt_sampling;
   diffusion::DiffusionSamplingOptions diffusion_sampling;
@@ -142,7 +168,6 @@ int run_generate(int argc, char** argv) {
 
   use_torch_threads(threads_option(cli));
   const UpAxis up = cli.up_axis("--up");
-  const std::vector<std::string>& captions = cli.positionals("CAPTION");
   std::string caption;
   for (const std::string& segment : captions) caption += (caption.empty() ? "" : " / ") + segment;
   tat::DecodeCorrections corrections;
@@ -168,8 +193,8 @@ int run_generate(int argc, char** argv) {
     target = tat::prepare_for_model(cli.value("--skeleton"), fps, up);
     const int64_t window = diffusion_session->model.model->config().max_frames;
     std::vector<diffusion::DiffusionSegment> segments;
-    for (const std::string& segment : captions) {
-      segments.push_back({segment, seconds > 0 ? std::max<int64_t>(4, std::lround(seconds * fps)) : window});
+    for (size_t i = 0; i < captions.size(); ++i) {
+      segments.push_back({captions[i], seconds[i] > 0 ? std::max<int64_t>(4, std::lround(seconds[i] * fps)) : window});
     }
     motions = diffusion::generate_motions(*diffusion_session, *target, segments, samples, diffusion_sampling);
     write_sample = [&](int i) {
@@ -182,8 +207,9 @@ int run_generate(int argc, char** argv) {
     fps = gpt_session->fps();
     target = tat::prepare_for_model(cli.value("--skeleton"), fps, up);
     std::vector<gpt::Segment> segments;
-    for (const std::string& segment : captions) {
-      segments.push_back({segment, seconds > 0 ? std::max<int64_t>(1, std::lround(seconds * fps / gpt_session->downsampling())) : 0});
+    for (size_t i = 0; i < captions.size(); ++i) {
+      const int64_t steps = std::max<int64_t>(1, std::lround(seconds[i] * fps / gpt_session->downsampling()));
+      segments.push_back({captions[i], seconds[i] > 0 ? steps : 0});
     }
     codes = gpt::generate_codes(*gpt_session, *target, segments, samples, gpt_sampling);
     write_sample = [&](int i) {

@@ -6,6 +6,7 @@
 #include "nec/evaluator/retrieval.h"
 #include "nec/evaluator/retrieval_index.h"
 #include "nec/corpus/dataset.h"
+#include "nec/motion/bvh.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
 #include "nec/tat/session.h"
@@ -17,6 +18,20 @@
 #include <filesystem>
 
 namespace nec::app {
+namespace {
+
+// Match `rank` as DIR/rank.bvh (the cache's skeleton and motion of the clip) and its first caption as DIR/rank.txt.
+void save_match(const std::string& dir, int rank, const DatasetCache& cache, int clip) {
+  std::filesystem::create_directories(dir);
+  const CacheClip& info = cache.clips[static_cast<size_t>(clip)];
+  Clip motion = cache.clip(clip);
+  motion.motion.fps = info.fps;
+  const std::filesystem::path stem = std::filesystem::path(dir) / std::to_string(rank);
+  write_bvh(stem.string() + ".bvh", motion.skeleton, motion.motion);
+  write_file_atomic(stem.string() + ".txt", info.captions.empty() ? "" : info.captions.front() + "\n");
+}
+
+}  // namespace
 
 int run_retrieve(int argc, char** argv) {
   CommandLine cli("nec retrieve",
@@ -32,9 +47,13 @@ int run_retrieve(int argc, char** argv) {
   cli.option("-k", "K", "5", "how many results");
   cli.option("--plan", "PLAN", "", "only clips of this body plan or dataset, e.g. quadruped, dog, bandai");
   cli.option("--view", "PAGE.html", "", "also write a page that plays the matched clips side by side");
+  cli.option("--save", "DIR", "", "also write the matched clips as DIR/1.bvh ... DIR/K.bvh (on the skeleton the cache\n"
+                                  "holds them on), each with its caption in DIR/N.txt; DIR is made if missing");
+  cli.flag("--force", "overwrite files of --save that exist");
   cli.option("--up", "AXIS", "auto", "up axis of --motion: auto, y or z");
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
   cli.example("nec retrieve \"a dog trots to the left\" --db cache/ --evaluator runs/eval/best -k 5 --view dog.html");
+  cli.example("nec retrieve \"a person jumps\" --db cache/ -k 3 --save found/ && nec transfer found/1.bvh --to my_rig.bvh -o jump.bvh");
   cli.example("nec retrieve --motion walk.bvh --db cache/ --evaluator runs/eval/best");
   if (!cli.parse(argc, argv)) return 0;
   const bool by_motion = !cli.value("--motion").empty();
@@ -44,6 +63,16 @@ int run_retrieve(int argc, char** argv) {
   if (k < 1) throw UsageError("-k must be >= 1");
   const std::string view = cli.value("--view");
   if (!view.empty() && std::filesystem::exists(view)) throw UsageError(view + " exists; choose another --view file");
+  const std::string save = cli.value("--save");
+  if (!save.empty() && by_motion) throw UsageError("--save writes the clips found for a CAPTION, not for --motion");
+  if (!save.empty()) {
+    for (int64_t i = 1; i <= k && !cli.is_set("--force"); ++i) {
+      for (const char* extension : {".bvh", ".txt"}) {
+        const std::filesystem::path file = std::filesystem::path(save) / (std::to_string(i) + extension);
+        if (std::filesystem::exists(file)) throw InputError(file.string(), 0, "exists; pass --force to overwrite it");
+      }
+    }
+  }
 
   const auto start = std::chrono::steady_clock::now();
   const DatasetCache cache = read_cache(cli.value("--db"));
@@ -80,7 +109,9 @@ int run_retrieve(int argc, char** argv) {
       fmt::print("| {} | {:.3f} | {} | {:.1f}-{:.1f} | {} |\n", i + 1, top[i].score, c.id, from, to,
                  c.captions.empty() ? "" : c.captions.front());
       if (!view.empty()) views.push_back({fmt::format("{}. {}", i + 1, c.id), c.captions, cache.clip(clip)});
+      if (!save.empty()) save_match(save, static_cast<int>(i) + 1, cache, clip);
     }
+    if (!save.empty()) fmt::print("wrote {} clips to {}\n", top.size(), save);
     if (!view.empty()) {
       viewer::ViewOptions options;
       options.title = "nec retrieve: " + captions.front();

@@ -113,6 +113,27 @@ TEST_F(CliEvaluator, RetrievalEvaluationAndQueries) {
   const CommandResult second = run_nec(query);
   ASSERT_EQ(second.exit_code, 0) << second.output;
   EXPECT_FALSE(contains(second.output, "indexed ")) << "the stored index was not reused:\n" << second.output;
+  // --save writes the matches as BVH with their captions, in the order of the table; never over files without --force.
+  const CommandResult saved = run_nec(query + " --save " + path("found"));
+  ASSERT_EQ(saved.exit_code, 0) << saved.output;
+  EXPECT_TRUE(contains(saved.output, "wrote 3 clips to ")) << saved.output;
+  for (int rank = 1; rank <= 3; ++rank) {
+    const std::string stem = path("found/" + std::to_string(rank));
+    const Clip clip = read_bvh(stem + ".bvh");
+    EXPECT_GE(clip.motion.frame_count, 8);
+    const std::string caption = read_file(stem + ".txt");
+    ASSERT_FALSE(caption.empty());
+    const std::string row = "| " + std::to_string(rank) + " | ";
+    const size_t at = saved.output.find(row);
+    ASSERT_NE(at, std::string::npos) << saved.output;
+    const std::string line = saved.output.substr(at, saved.output.find('\n', at) - at);
+    EXPECT_TRUE(contains(line, "| " + caption.substr(0, caption.size() - 1) + " |")) << line << " vs " << caption;
+  }
+  EXPECT_FALSE(fs::exists(path("found/4.bvh")));
+  const CommandResult again = run_nec(query + " --save " + path("found"));
+  EXPECT_EQ(again.exit_code, 1) << again.output;
+  EXPECT_TRUE(contains(again.output, "1.bvh: exists; pass --force")) << again.output;
+  EXPECT_EQ(run_nec(query + " --save " + path("found") + " --force").exit_code, 0);
   // The page is never overwritten; an empty caption and a missing evaluator are refused.
   const CommandResult page = run_nec(query + " --view " + path("hits.html"));
   EXPECT_EQ(page.exit_code, 2) << page.output;

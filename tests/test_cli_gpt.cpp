@@ -155,6 +155,20 @@ TEST_F(CliGpt, GeneratesOnASkeletonNoModelSaw) {
                                              " -o " + path("two.bvh") + " --seconds 1"));
   ASSERT_EQ(two.exit_code, 0) << two.output;
   EXPECT_EQ(read_bvh(path("two.bvh")).motion.frame_count, 64);
+  // One length per caption: 1 s and 0.5 s (8 + 4 steps of 4 frames); a count that fits neither is refused.
+  const CommandResult each = run_nec(generate("\"a spider walks forward\" \"a spider turns left\" --skeleton " +
+                                              spider() + " -o " + path("each.bvh") + " --seconds 1,0.5"));
+  ASSERT_EQ(each.exit_code, 0) << each.output;
+  EXPECT_EQ(read_bvh(path("each.bvh")).motion.frame_count, 48);
+  const CommandResult three = run_nec(generate("\"a spider walks forward\" \"a spider turns left\" --skeleton " +
+                                               spider() + " -o " + path("three.bvh") + " --seconds 1,1,1"));
+  EXPECT_EQ(three.exit_code, 1);
+  EXPECT_NE(three.output.find("gives 3 lengths for 2 captions"), std::string::npos) << three.output;
+  const CommandResult bad = run_nec(generate("\"a spider walks\" --skeleton " + spider() + " -o " + path("bad.bvh") +
+                                             " --seconds 1x"));
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("'1x' is not a length"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(path("three.bvh")) || fs::exists(path("bad.bvh")));
   // Without --seconds the GPT ends the motion (at most max_steps - 1 = 15 steps).
   const CommandResult open = run_nec(generate("\"a spider walks\" --skeleton " + spider() + " -o " + path("open.bvh")));
   ASSERT_EQ(open.exit_code, 0) << open.output;
