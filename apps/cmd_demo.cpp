@@ -111,7 +111,7 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
   int diffused = 0;
   for (size_t i = 0; i < clips_by_plan.size() && i < 5; ++i) {
     const auto& [skeleton_path, caption] = clips_by_plan[i];
-    const PreparedClip target = tat::prepare_for_model(skeleton_path, fps, UpAxis::Auto);
+    const PreparedClip target = tat::prepare_target(skeleton_path, fps, UpAxis::Auto);
     const int64_t steps = static_cast<int64_t>(4.0 * fps) / session.downsampling();
     const at::Tensor codes = gpt::generate_codes(session, target, {{caption, steps}}, 1, sampling).front();
     const std::string result = (models / fmt::format("generated_{}.bvh", i + 1)).string();
@@ -119,7 +119,7 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
     generated.push_back(viewer::load_view_clip(result));
     generated.back().captions = {caption};
     if (diffusion_session && i < 3) {
-      const PreparedClip on_skeleton = tat::prepare_for_model(skeleton_path, diffusion_session->fps(), UpAxis::Auto);
+      const PreparedClip on_skeleton = tat::prepare_target(skeleton_path, diffusion_session->fps(), UpAxis::Auto);
       diffusion::DiffusionSamplingOptions options;  // 50 steps, guidance 2.5
       options.seed = i;
       const Features motion = diffusion::generate_motions(*diffusion_session, on_skeleton,
@@ -138,7 +138,7 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
   const auto biped = std::find_if(clips_by_plan.begin(), clips_by_plan.end(),
                                   [](const auto& clip) { return evaluator::body_plan_of_file(clip.first, "") == "biped"; });
   if (biped != clips_by_plan.end()) {
-    const PreparedClip target = tat::prepare_for_model(biped->first, fps, UpAxis::Auto);
+    const PreparedClip target = tat::prepare_target(biped->first, fps, UpAxis::Auto);
     const int64_t steps = static_cast<int64_t>(3.0 * fps) / session.downsampling();
     const std::vector<gpt::Segment> segments{{"a person walks forward", steps}, {"a person turns to the left", steps}};
     const at::Tensor codes = gpt::generate_codes(session, target, segments, 1, sampling).front();

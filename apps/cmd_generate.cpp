@@ -122,9 +122,11 @@ int run_generate(int argc, char** argv) {
   if (samples < 1 || samples > 256) throw UsageError("--samples must be in 1..256");
   const std::vector<std::string>& captions = cli.positionals("CAPTION");
   const std::vector<double> seconds = segment_seconds(cli.value("--seconds"), captions.size());
-  // "gpt" and "diffusion" name the default models unless a folder of that name is there.
+  // "gpt" and "diffusion" name the default models unless a checkpoint of that name is there.
   std::string model = cli.value("--model");
-  if ((model == "gpt" || model == "diffusion") && !fs::exists(model)) model = model_or_default("", model, "--model " + model);
+  if ((model == "gpt" || model == "diffusion") && checkpoint_format(model).empty()) {
+    model = model_or_default("", model, "--model " + model);
+  }
   model = model_or_default(model, "gpt", "--model");
   const bool is_diffusion = checkpoint_format(model) == diffusion::kDiffusionCheckpointFormat;
   gpt::SamplingOptions gpt_sampling;
@@ -190,7 +192,7 @@ int run_generate(int argc, char** argv) {
     if (diffusion_sampling.steps > noise_steps) {
       throw UsageError(fmt::format("--steps {} is more than the model's {} noise steps", diffusion_sampling.steps, noise_steps));
     }
-    target = tat::prepare_for_model(cli.value("--skeleton"), fps, up);
+    target = tat::prepare_target(cli.value("--skeleton"), fps, up);
     const int64_t window = diffusion_session->model.model->config().max_frames;
     std::vector<diffusion::DiffusionSegment> segments;
     for (size_t i = 0; i < captions.size(); ++i) {
@@ -205,7 +207,7 @@ int run_generate(int argc, char** argv) {
   } else {
     gpt_session.emplace(gpt::open_generator(model, cli.value("--glove")));
     fps = gpt_session->fps();
-    target = tat::prepare_for_model(cli.value("--skeleton"), fps, up);
+    target = tat::prepare_target(cli.value("--skeleton"), fps, up);
     std::vector<gpt::Segment> segments;
     for (size_t i = 0; i < captions.size(); ++i) {
       const int64_t steps = std::max<int64_t>(1, std::lround(seconds[i] * fps / gpt_session->downsampling()));

@@ -2,7 +2,8 @@
 # Installs Blender (Debian's 3.4), node + three.js and the CMU test files when
 # missing, builds nec in build-interop/ and runs the interop check
 # (CTest label `interop`): BVH written by nec must import in Blender and in
-# three.js BVHLoader as nec reads it. See tests/interop/check_import.sh.
+# three.js BVHLoader as nec reads it (tests/interop/check_import.sh), and the
+# Blender add-on must work inside Blender (tests/blender/check_addon.sh).
 #   scripts/interop.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."

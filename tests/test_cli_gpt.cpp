@@ -169,6 +169,17 @@ TEST_F(CliGpt, GeneratesOnASkeletonNoModelSaw) {
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.output.find("'1x' is not a length"), std::string::npos) << bad.output;
   EXPECT_FALSE(fs::exists(path("three.bvh")) || fs::exists(path("bad.bvh")));
+  // A rig exported in its rest pose (one frame, as Blender's exporter writes it for the add-on) is a skeleton too.
+  const std::string posed = path("one_frame.bvh");
+  write_bvh(posed, source.skeleton, source.motion.slice(0, 1));
+  const CommandResult on_one = run_nec(generate("\"a spider walks\" --skeleton " + posed + " -o " + path("on_one.bvh") +
+                                                " --seconds 1"));
+  ASSERT_EQ(on_one.exit_code, 0) << on_one.output;
+  EXPECT_EQ(read_bvh(path("on_one.bvh")).motion.frame_count, 32);
+  const CommandResult onto_one = run_nec("transfer " + out + " --to " + posed + " -o " + path("onto_one.bvh") +
+                                         " --model " + shared("gpt/tat") + " --threads 1");
+  ASSERT_EQ(onto_one.exit_code, 0) << onto_one.output;
+  EXPECT_EQ(read_bvh(path("onto_one.bvh")).motion.frame_count, 32);
   // Without --seconds the GPT ends the motion (at most max_steps - 1 = 15 steps).
   const CommandResult open = run_nec(generate("\"a spider walks\" --skeleton " + spider() + " -o " + path("open.bvh")));
   ASSERT_EQ(open.exit_code, 0) << open.output;

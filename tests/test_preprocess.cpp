@@ -219,6 +219,28 @@ TEST(Preprocess, FoldsJitteringTranslationsAndReportsTheLargest) {
   EXPECT_NEAR((clip.motion.translation(0, 1) - clip.skeleton.offsets[1]).norm(), 0.0, 1e-12);
 }
 
+// Blender's exporter keys a zero-length bone (CMU's Neck under a 1e-6 offset) with float noise as large as the
+// bone itself: noise that small against the body folds, while the same ratio on a real bone still rejects.
+TEST(Preprocess, FoldsFloatNoiseOnAZeroLengthBone) {
+  Clip clip = walking_biped();
+  const double diameter = clip.skeleton.diameter();
+  clip.skeleton.offsets[2] = Vec3(0, 1e-7 * diameter, 0);
+  clip.skeleton.channels[2] = ChannelLayout::position_rotations(EulerOrder::ZXY);
+  for (int t = 0; t < clip.motion.frame_count; ++t) {
+    clip.motion.translation(t, 2) = clip.skeleton.offsets[2] + Vec3(t % 2 == 0 ? 5e-8 * diameter : 0, 0, 0);
+  }
+  PreprocessReport report;
+  EXPECT_TRUE(fold_joint_translations(clip, PreprocessOptions{}, report)) << report.rejection;
+  Clip stretched = walking_biped();  // a short real bone (half a percent of the body) stretching by 30 %
+  stretched.skeleton.offsets[2] = Vec3(0, 0.005 * diameter, 0);
+  stretched.skeleton.channels[2] = ChannelLayout::position_rotations(EulerOrder::ZXY);
+  for (int t = 0; t < stretched.motion.frame_count; ++t) {
+    stretched.motion.translation(t, 2) = stretched.skeleton.offsets[2] + Vec3(t % 2 == 0 ? 0.0015 * diameter : 0, 0, 0);
+  }
+  PreprocessReport bad;
+  EXPECT_FALSE(fold_joint_translations(stretched, PreprocessOptions{}, bad));
+}
+
 TEST(Preprocess, RejectsAbnormalBonesAndEmptyClips) {
   Clip clip = walking_biped();
   clip.skeleton.offsets[2] = Vec3(0, 500.0, 0);  // a corrupted head bone

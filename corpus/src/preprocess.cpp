@@ -169,7 +169,8 @@ bool fold_joint_translations(Clip& clip, const PreprocessOptions& options, Prepr
     for (int t = 0; t < m.frame_count; ++t) deviation = std::max(deviation, (m.translation(t, j) - means[j]).norm());
     const double bone = means[j].norm();
     const bool stretches = deviation > options.translation_tolerance * diameter ||
-                           deviation > options.translation_bone_tolerance * bone;
+                           (deviation > options.translation_bone_tolerance * bone &&
+                            deviation > options.translation_noise * diameter);
     if (stretches && !options.fold_any_translation) {
       report.rejection = fmt::format(
           "joint '{}' moves relative to its parent by up to {:.3g} ({:.3g} diameters, {:.3g} of its bone; limits "

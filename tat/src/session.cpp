@@ -43,12 +43,21 @@ TokenizerSession open_tokenizer_session(const std::string& model_dir, const std:
   return session;
 }
 
-PreparedClip prepare_for_model(const std::string& path, double fps, UpAxis up) {
+namespace {
+
+PreparedClip prepare_at(const std::string& path, double fps, UpAxis up, int min_frames) {
   PreprocessOptions options;
   options.target_fps = fps;
   options.up = up;
+  options.min_frames = min_frames;
   return preprocess_file(path, options);
 }
+
+}  // namespace
+
+PreparedClip prepare_for_model(const std::string& path, double fps, UpAxis up) { return prepare_at(path, fps, up, 2); }
+
+PreparedClip prepare_target(const std::string& path, double fps, UpAxis up) { return prepare_at(path, fps, up, 1); }
 
 double heading_degrees(const Normalization& n) {
   const Quat yaw = (up_part(n).conjugate() * n.rotation).normalized();
@@ -100,7 +109,7 @@ std::string animation_name(const TokenFile& tokens) {
 
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path,
                          UpAxis up, const DecodeCorrections& corrections, const std::string& out_path) {
-  return decode_onto(session, tokens, prepare_for_model(target_path, session.model.info.fps, up), target_path,
+  return decode_onto(session, tokens, prepare_target(target_path, session.model.info.fps, up), target_path,
                      corrections, out_path);
 }
 

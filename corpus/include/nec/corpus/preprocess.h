@@ -28,9 +28,11 @@ struct PreprocessOptions {
   double max_bone_ratio = 0.9;          // reject a bone longer than this times the diameter (one bone dominating the longest chain)
   // Non-root position channels are folded into offsets (their mean) when they vary by at most
   // translation_tolerance × diameter and translation_bone_tolerance × the bone's length (exports jitter
-  // there); more is stretching and rejects the clip, unless fold_any_translation.
+  // there); more is stretching and rejects the clip, unless fold_any_translation. Variations under
+  // translation_noise × diameter are the export's float noise whatever the bone's length (a zero-length bone).
   double translation_tolerance = 0.01;
   double translation_bone_tolerance = 0.1;
+  double translation_noise = 1e-4;
   bool fold_any_translation = false;
   UpAxis up = UpAxis::Auto;             // the file's up axis; Auto detects Z-up files
   int min_frames = 2;                   // clips shorter than this (after resampling) are rejected

@@ -44,6 +44,9 @@ TokenizerSession open_tokenizer_session(const std::string& model_dir, const std:
 
 // read_bvh + preprocess at the model's fps; InputError naming the file when it is rejected.
 PreparedClip prepare_for_model(const std::string& path, double fps, UpAxis up);
+// The same for a skeleton that receives motion (generate --skeleton, transfer --to): its own motion is not used,
+// so one frame (a rig exported in its rest pose) is enough.
+PreparedClip prepare_target(const std::string& path, double fps, UpAxis up);
 
 // The yaw (degrees, about the up axis) of a normalization's frame-0 heading,
 // and a normalization that places normalized motion into `target`'s file
