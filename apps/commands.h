@@ -32,5 +32,6 @@ int run_retrieve(int argc, char** argv);        // nec retrieve
 int run_train_gpt(int argc, char** argv);       // nec train gpt
 int run_train_diffusion(int argc, char** argv); // nec train diffusion
 int run_generate(int argc, char** argv);        // nec generate
+int run_serve(int argc, char** argv);           // nec serve
 
 }  // namespace nec::app

@@ -38,6 +38,7 @@ constexpr Subcommand kSubcommands[] = {
     {"decode", nec::app::run_decode, "decode motion tokens onto any skeleton, as BVH"},
     {"transfer", nec::app::run_transfer, "move a clip onto another skeleton (encode + decode)"},
     {"generate", nec::app::run_generate, "motion from text for any skeleton (trained GPT + tokenizer), as BVH"},
+    {"serve", nec::app::run_serve, "the local studio: a web page to generate, transfer and search on your rig"},
 };
 
 void print_overview() {

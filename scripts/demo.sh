@@ -30,3 +30,7 @@ if [ -n "${NEC_TAT_MODEL:-}" ]; then
   "$nec" zoo --out out/demo/transfer_zoo --creatures 9 --clips-per-creature 4 --seed 1 --quiet --force
   scripts/transfers.sh "$NEC_TAT_MODEL" out/demo/transfer_zoo out/demo/transfers
 fi
+
+echo
+echo "== next: open out/demo/index.html in a browser, or the studio, where you type captions for a rig of yours:"
+echo "   $nec serve --db out/demo/cache        # then open http://127.0.0.1:8080/ (Ctrl-C stops it)"

@@ -18,7 +18,7 @@ LEVELS = {
     "motion": 0,                                              # what a motion is
     "corpus": 1, "fitting": 1, "assets": 1, "zoo": 1,         # built on the core alone
     "layers": 2, "train": 2, "viewer": 2,
-    "text": 3,
+    "text": 3, "studio": 3,
     "owo": 4,
     "tat": 5,
     "evaluator": 6, "gpt": 6, "diffusion": 6,

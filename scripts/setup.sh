@@ -12,7 +12,7 @@ source scripts/lib.sh
 # libicu-dev: Unicode NFKC for the pretrained sentence encoder's pieces (text/).
 # libopenblas0-openmp: Debian's libtorch calls the generic libblas.so.3, which is the slow
 # reference BLAS unless an optimized one is installed (OpenMP flavour, like libtorch's threads).
-ensure_packages setup libopenblas0-openmp build-essential cmake ninja-build ccache pkg-config libtorch-dev libeigen3-dev nlohmann-json3-dev libsentencepiece-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libgloo-dev libassimp-dev libicu-dev assimp-testmodels
+ensure_packages setup libopenblas0-openmp build-essential cmake ninja-build ccache pkg-config libtorch-dev libeigen3-dev nlohmann-json3-dev libsentencepiece-dev libfmt-dev libgtest-dev libgmock-dev libbenchmark-dev zlib1g-dev libgloo-dev libassimp-dev libicu-dev libcpp-httplib-dev assimp-testmodels
 
 scripts/setup_viewer_assets.sh
 

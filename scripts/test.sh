@@ -10,5 +10,8 @@ ensure_three || echo "test: three.js not installed; interop_import skips its thr
 ensure_packages test nodejs npm
 [ -d tests/sentence_encoder/node_modules/@energetic-ai/embeddings ] ||
   npm ci --prefix tests/sentence_encoder --no-audit --no-fund
+# puppeteer-core, which drives Debian's chromium through the studio page (tests/browser/studio).
+[ -d tests/browser/studio/node_modules/puppeteer-core ] ||
+  npm ci --prefix tests/browser/studio --no-audit --no-fund
 cd build
 ctest --output-on-failure --parallel "$(nproc)" "$@"

@@ -1,13 +1,13 @@
 # Writes OUTPUT, a C++ file holding the nec view assets as string literals:
-# view.html and view.js from ASSET_DIR (always), and from THREE_DIR (an
+# view.html, view.js and studio.html from ASSET_DIR (always), and from THREE_DIR (an
 # unpacked npm package three) three.module.min.js, BVHLoader.js,
 # GLTFLoader.js (with the BufferGeometryUtils.js it imports), OrbitControls.js
 # and LICENSE when all of them are present. The file is only
 # replaced when its contents change, so unchanged assets cost no recompile.
 #   cmake -DOUTPUT=... -DASSET_DIR=... -DTHREE_DIR=... -DTHREE_VERSION=... -P embed_assets.cmake
 set(delimiter "nec_asset")
-set(names view.html view.js)
-set(paths "${ASSET_DIR}/view.html" "${ASSET_DIR}/view.js")
+set(names view.html view.js studio.html)
+set(paths "${ASSET_DIR}/view.html" "${ASSET_DIR}/view.js" "${ASSET_DIR}/studio.html")
 set(three_names three.module.min.js BVHLoader.js GLTFLoader.js BufferGeometryUtils.js OrbitControls.js three.LICENSE)
 set(three_paths
   "${THREE_DIR}/build/three.module.min.js"

@@ -131,6 +131,8 @@ ViewClip load_view_clip(const std::string& path) {
   return out;
 }
 
+std::string make_studio_html() { return std::string(asset("studio.html")); }
+
 bool have_three() { return detail::find_embedded_asset("three.module.min.js") != nullptr; }
 
 std::string three_version() { return detail::kEmbeddedThreeVersion; }

@@ -64,4 +64,8 @@ std::string three_version();
 // frames or bad options.
 std::string make_view_html(const std::vector<ViewClip>& clips, const ViewOptions& options = {});
 
+// The page of `nec serve` (viewer/assets/studio.html): pick or upload a rig, captions on a timeline, generate,
+// transfer, search; each result shown in a make_view_html page the server makes. Needs no three.js of its own.
+std::string make_studio_html();
+
 }  // namespace nec::viewer
