@@ -241,6 +241,19 @@ TEST(Studio, GeneratesTransfersAndSearchesIntoFilesNecReadsBack) {
   ASSERT_EQ(found["state"], "done") << found.dump();
   EXPECT_EQ(found["files"], json({"1.bvh", "1.txt", "2.bvh", "2.txt"}));
 
+  // A rigged asset: its copy with the motion (GLB) is offered too, and the page shows its skinned mesh.
+  const std::string wuson = "/usr/share/assimp/models/X/Testwuson.X";
+  if (fs::exists(wuson)) {
+    const json asset = body_of(upload(c, "/api/rigs", "file", "Testwuson.X", read_file(wuson)));
+    ASSERT_EQ(asset["asset"], true) << asset.dump();
+    const json on_asset = wait_for(c, body_of(c.Post("/api/generate", generate_request(asset["id"], 1, 0).dump(),
+                                                      "application/json"))["job"]);
+    ASSERT_EQ(on_asset["state"], "done") << on_asset.dump();
+    EXPECT_EQ(on_asset["files"], json({"generated.bvh", "generated.glb", "generated.txt"}));
+    const std::string shown = c.Get(("/api/jobs/" + on_asset["job"].get<std::string>() + "/view.html").c_str())->body;
+    EXPECT_NE(shown.find("nec-mesh-0"), std::string::npos) << "the page shows the asset's mesh";
+  }
+
   // A failing job says why in nec's own words.
   json bad = generate_request(person["id"], 2, 0);
   bad["captions"][0]["text"] = "?!";

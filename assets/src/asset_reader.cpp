@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <mutex>
 
 namespace nec::assets {
 namespace {
@@ -130,9 +131,12 @@ std::vector<Clip> read_asset(const std::string& path, const ClipReadOptions& opt
 }
 
 void register_asset_formats() {
-  register_clip_format({"rigged assets (FBX, glTF, Collada, DirectX) through assimp", asset_extensions(), read_asset});
-  register_clip_writer({"the motion as a new animation on a copy of the asset (GLB)", asset_output_extensions(),
-                        animation_onto_asset});
+  static std::once_flag registered;  // nec's main and the studio both call it
+  std::call_once(registered, [] {
+    register_clip_format({"rigged assets (FBX, glTF, Collada, DirectX) through assimp", asset_extensions(), read_asset});
+    register_clip_writer({"the motion as a new animation on a copy of the asset (GLB)", asset_output_extensions(),
+                          animation_onto_asset});
+  });
 }
 
 }  // namespace nec::assets

@@ -4,6 +4,7 @@
 #include "nec/studio/jobs.h"
 #include "nec/studio/subprocess.h"
 
+#include "nec/assets/asset_reader.h"
 #include "nec/motion/clip_file.h"
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
@@ -22,6 +23,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <system_error>
+#include <sys/socket.h>
 #include <unistd.h>
 
 namespace nec::studio {
@@ -35,6 +37,7 @@ constexpr size_t kMaxCaptionLength = 300;
 constexpr double kMaxSeconds = 60.0;
 constexpr int kMaxSearchResults = 10;
 constexpr size_t kHttpThreads = 64;
+constexpr int kListenBacklog = 256;
 const char* const kRigExtensions[] = {".bvh", ".fbx", ".glb", ".dae", ".x"};
 
 // A request the studio refuses: answered with `status` and {"error": message}.
@@ -431,6 +434,7 @@ struct Studio::State {
 
 Studio::Studio(const StudioOptions& options) : state_(std::make_unique<State>(options)) {
   State& s = *state_;
+  assets::register_asset_formats();  // uploads of FBX / GLB / Collada / .x are read here
   if (options.nec_binary.empty() || !fs::is_regular_file(options.nec_binary)) {
     throw std::invalid_argument("nec serve: the nec binary '" + options.nec_binary + "' is not a file");
   }
@@ -461,9 +465,19 @@ Studio::~Studio() {
 
 int Studio::bind() {
   State& s = *state_;
+  // SO_REUSEADDR alone (cpp-httplib's default adds SO_REUSEPORT, which would let a second studio share the port).
+  int listening = -1;
+  s.server.set_socket_options([&listening](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    listening = sock;
+  });
   const int port = s.options.port == 0 ? s.server.bind_to_any_port(s.options.host)
                                        : (s.server.bind_to_port(s.options.host, s.options.port) ? s.options.port : -1);
-  if (port < 0) throw std::runtime_error(fmt::format("nec serve: cannot listen on {}:{}", s.options.host, s.options.port));
+  if (port < 0) throw std::runtime_error(fmt::format("cannot listen on {}:{} (another program on that port? try --port)", s.options.host, s.options.port));
+  // cpp-httplib listens with a backlog of 5: connections beyond it are reset when many users arrive at once.
+  // Listening again on the socket raises it.
+  if (listening >= 0) ::listen(listening, kListenBacklog);
   return port;
 }
 

@@ -40,6 +40,6 @@ std::vector<Clip> read_asset(const std::string& path, const ClipReadOptions& opt
 
 // Registers read_asset() with motion/'s read_clips() for asset_extensions(),
 // and animation_onto_asset() with write_clip() (asset_writer.h).
-void register_asset_formats();
+void register_asset_formats();  // once per process; later calls do nothing
 
 }  // namespace nec::assets
