@@ -12,7 +12,9 @@
 #    come out as their own group, cmu_free);
 #  - the user-style queries of benchmarks/data/queries.tsv through `nec retrieve` (scripts/eval_queries.py) on
 #    the locomotion and other families' caches together, with these models' evaluator and, when given, a
-#    baseline's.
+#    baseline's;
+#  - with a baseline, its GPT on the same gestures and vertical clips (judged by these models' evaluator) and
+#    the vertical range it keeps.
 #   scripts/eval_default_models.sh MODELS TRAIN_CACHE OUT [BASELINE_MODELS]
 # CLIPS: at most this many clips per dataset and family (default 60); SAMPLES per caption (default 2).
 # Writes OUT/<family>/{zoo,cache,gpt/t2m.md,retrieval.md}, OUT/vertical_range.md, OUT/train-test/t2m.md, OUT/queries*.md and
@@ -61,6 +63,16 @@ done
 
 step "vertical range of generated and reconstructed jumps, sits and lie-downs"
 scripts/vertical_range.sh "$out/vertical/gpt" "$models/gpt/tat" | tee "$out/vertical_range.md"
+if [ -n "$baseline" ]; then
+  # The baseline's GPT on the same gestures and vertical clips, judged by these models' evaluator.
+  for family in gestures vertical; do
+    step "$family: the baseline's GPT ($baseline/gpt)"
+    scripts/eval_generation.sh "$baseline/gpt" "$out/$family/cache" "$models/evaluator" "$out/$family/gpt-baseline" \
+      test "$samples" "$clips" > "$out/$family/gpt-baseline.log"
+    tail -n 40 "$out/$family/gpt-baseline/t2m.md"
+  done
+  scripts/vertical_range.sh "$out/vertical/gpt-baseline" "$baseline/gpt/tat" | tee "$out/vertical_range-baseline.md"
+fi
 
 step "the training cache's test split (the shared CMU test takes: cmu_free)"
 scripts/eval_generation.sh "$models/gpt" "$train_cache" "$models/evaluator" "$out/train-test" test "$samples" \
@@ -81,6 +93,12 @@ fi
     echo "## $family"; echo; cat "$out/$family/gpt/t2m.md"; echo; cat "$out/$family/retrieval.md"; echo
   done
   echo "## vertical range"; echo; cat "$out/vertical_range.md"; echo
+  if [ -n "$baseline" ]; then
+    for family in gestures vertical; do
+      echo "## $family, the baseline's GPT"; echo; cat "$out/$family/gpt-baseline/t2m.md"; echo
+    done
+    echo "## vertical range, the baseline's GPT"; echo; cat "$out/vertical_range-baseline.md"; echo
+  fi
   echo "## training cache, test split"; echo; cat "$out/train-test/t2m.md"; echo
   echo "## queries"; echo; head -n 2 "$out/queries.md"
   [ -n "$baseline" ] && { echo; echo "baseline:"; head -n 2 "$out/queries-baseline.md"; }

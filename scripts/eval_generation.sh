@@ -7,11 +7,15 @@
 # SPLIT: test (default) or val; SAMPLES per caption (default 1; 2 or more also give Multimodality);
 # CLIPS: at most this many clips of each dataset, evenly spaced in the manifest's order (default: all).
 # NEC_THREADS: threads of each `nec generate` (default 2).
+# NEC_REST_SKELETONS=1: generate onto a one-frame copy of each clip's file in its rest pose
+# (scripts/rest_pose_bvh.py), as a user's exported rig, instead of the clip itself, whose canonical rest pose is
+# the clip's own mean pose (a waving clip's raised arm, which the model is then handed).
 # NEC_CAPTIONS=TSV (lines: a clip's file name, a tab, a caption; `#` comments): generate from those captions
 # instead, for the listed clips only; each sidecar keeps the clip's own first caption, so the evaluator scores
 # a paraphrase's motion against the caption it rewrites (benchmarks/data/paraphrases.tsv).
 # Writes OUT_DIR/generated/<dataset>/<the source's folder>/*.bvh (+ caption sidecars; the zoo's folders
-# cNNN_<plan> give `nec eval t2m` the body plan), OUT_DIR/t2m.md and OUT_DIR/t2m.json.
+# cNNN_<plan> give `nec eval t2m` the body plan), OUT_DIR/t2m.md and OUT_DIR/t2m.json (and OUT_DIR/rest/ with
+# NEC_REST_SKELETONS).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 4 ]; then
@@ -59,7 +63,13 @@ while IFS=$'\t' read -r dataset source seconds caption own; do
   folder="$out/generated/$dataset/$(basename "$(dirname "$source")")"
   mkdir -p "$folder"
   name=$(printf %04d "$count")
-  "$nec" generate "$caption" --skeleton "$source" --model "$model" --seconds "$seconds" --samples "$samples" \
+  skeleton=$source
+  if [ "${NEC_REST_SKELETONS:-0}" = 1 ]; then
+    mkdir -p "$out/rest"  # beside generated/, which `nec eval t2m` reads
+    skeleton="$out/rest/$name.bvh"
+    python3 scripts/rest_pose_bvh.py "$source" "$skeleton"
+  fi
+  "$nec" generate "$caption" --skeleton "$skeleton" --model "$model" --seconds "$seconds" --samples "$samples" \
     --seed "$count" -o "$folder/$name.bvh" --force --threads "$threads" > /dev/null
   if [ "$caption" != "$own" ]; then
     for sidecar in "$folder/$name".txt "$folder/$name"_*.txt; do

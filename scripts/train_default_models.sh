@@ -5,8 +5,9 @@
 # Debian's CMU files and the free CMU takes of ../shared/data/cmu (with their take descriptions). Never
 # ../shared/data/bandai or mann_dog: their licenses are non-commercial.
 #   scripts/train_default_models.sh [WORK_DIR] [OUT_DIR]     # defaults: out/default-models, models/default
-# Its training steps took about 110 minutes on 2 cores (the tokenizer and the evaluator, side by side,
-# 70 of them; the diffusion model's two stages 20); the data step under a minute. Writes
+# On 2 cores (2026-12-06, 3,661 clips): the data step 30 s, OwO 1.5 min, the tokenizer and the evaluator side by
+# side 42 and 57 min, the GPT (2,400 steps) 12 min on one thread; the diffusion model's two stages about 40 min
+# more alone (estimated from their speed beside other work). Writes
 # OUT_DIR/{gpt,evaluator,diffusion} (the GPT holds its tokenizer in gpt/tat, which holds its OwO encoder;
 # the diffusion model holds a copy of that encoder) without their training state; OUT_DIR/README.md
 # (kept) says how its numbers were measured. Run again after a stop, it goes on where it stopped (finished
