@@ -183,8 +183,8 @@ TEST_F(TextEncoderTest, ACaptionWithAnUnseenSynonymIsReadLikeItsWord) {
 }
 
 TEST_F(TextEncoderTest, EmptyLetterlessAndOverlongCaptionsAreRefused) {
-  EXPECT_EQ(error_of({""}), "query: the caption is empty");
-  EXPECT_EQ(error_of({"a dog walks", "?!"}), "query (caption 2): the caption has no letters: '?!'");
+  EXPECT_EQ(error_of({""}), "query: empty");
+  EXPECT_EQ(error_of({"a dog walks", "?!"}), "query (caption 2): no letters in '?!'");
   const std::string overlong = "a dog walks forward then a spider crawls to the left then a snake turns";
   const std::string message = error_of({overlong});
   EXPECT_NE(message.find("pieces, more than the 16 the text encoder takes"), std::string::npos) << message;
@@ -423,7 +423,7 @@ TEST_F(UseLiteTextEncoderTest, EmptyAndOverlongCaptionsAreRefusedNamingThem) {
     }
     return "(no error)";
   };
-  EXPECT_EQ(error_of({"a dog walks", ""}), "query (caption 2): the caption is empty");
+  EXPECT_EQ(error_of({"a dog walks", ""}), "query (caption 2): empty");
   const std::string message = error_of({"a dog walks forward then a spider crawls to the left then a snake turns around"});
   EXPECT_NE(message.find("pieces, more than the 16 the text encoder takes"), std::string::npos) << message;
 }

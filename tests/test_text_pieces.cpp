@@ -41,9 +41,9 @@ TEST(CaptionText, CaseDigitsAndPunctuationAreNormalized) {
 }
 
 TEST(CaptionText, EmptyCaptionsAndCaptionsWithoutLettersAreRefused) {
-  EXPECT_EQ(error_of(""), "query: the caption is empty");
-  EXPECT_EQ(error_of(" ?! "), "query: the caption has no letters: ' ?! '");
-  EXPECT_EQ(error_of("42"), "query: the caption has no letters: '42'");
+  EXPECT_EQ(error_of(""), "query: empty");
+  EXPECT_EQ(error_of(" ?! "), "query: no letters in ' ?! '");
+  EXPECT_EQ(error_of("42"), "query: no letters in '42'");
   EXPECT_EQ(checked_caption("Run!", "query"), "run");
 }
 

@@ -38,7 +38,6 @@ constexpr double kMaxSeconds = 60.0;
 constexpr int kMaxSearchResults = 10;
 constexpr size_t kHttpThreads = 64;
 constexpr int kListenBacklog = 256;
-const char* const kRigExtensions[] = {".bvh", ".fbx", ".glb", ".dae", ".x"};
 
 // A request the studio refuses: answered with `status` and {"error": message}.
 struct Refusal : std::runtime_error {
@@ -60,13 +59,17 @@ std::string lower(std::string text) {
   return text;
 }
 
-// The extension of an uploaded file's name when it is one nec reads as a rig or motion, else a Refusal.
+// The extension of an uploaded file's name when it is one nec reads as a rig or motion, else a Refusal. A .gltf
+// is refused: its buffers and textures are files beside it, and an upload is one file.
 std::string upload_extension(const std::string& filename) {
   const std::string extension = lower(fs::path(filename).extension().string());
-  for (const char* allowed : kRigExtensions) {
+  std::string readable;
+  for (const std::string& allowed : motion_file_extensions()) {
+    if (allowed == ".gltf") continue;
     if (extension == allowed) return extension;
+    readable += (readable.empty() ? "" : " ") + allowed;
   }
-  throw Refusal(400, "'" + filename + "': not a file nec reads (BVH, FBX, GLB, Collada .dae or .x)");
+  throw Refusal(400, "'" + filename + "': not a file nec reads (" + readable + ")");
 }
 
 // A name safe to keep: letters, digits, '-', '_' and '.', never a path; the extension given.
@@ -214,8 +217,6 @@ struct Studio::State {
     return options.models.empty() ? kind : (fs::path(options.models) / kind).string();
   }
 
-  std::vector<std::string> threads() const { return {"--threads", std::to_string(options.threads_per_job)}; }
-
   // The job, or 503 when the queue is full (its folder removed).
   json submit(JobSpec spec) {
     const fs::path folder = spec.folder;
@@ -228,8 +229,11 @@ struct Studio::State {
     return {{"job", *id}};
   }
 
-  // BVH on the rig, and for a rigged asset also a copy of the asset with the motion (GLB).
-  void add_outputs(std::vector<std::vector<std::string>>& commands, const Rig& rig, const std::string& stem) const {
+  // `nec` ARGV writing out/STEM.bvh on the rig; for a rigged asset also a copy of the asset with the motion (GLB).
+  void add_motion_commands(std::vector<std::vector<std::string>>& commands, std::vector<std::string> argv,
+                           const Rig& rig, const std::string& stem) const {
+    argv.insert(argv.end(), {"-o", "out/" + stem + ".bvh", "--threads", std::to_string(options.threads_per_job)});
+    commands.push_back(std::move(argv));
     if (rig.asset) {
       commands.push_back({options.nec_binary, "convert", "out/" + stem + ".bvh", "--onto", rig.path, "-o",
                           "out/" + stem + ".glb"});
@@ -266,15 +270,9 @@ struct Studio::State {
     JobSpec spec{"generate", new_job_folder(), {}};
     std::vector<std::string> argv{options.nec_binary, "generate"};
     argv.insert(argv.end(), captions.begin(), captions.end());
-    for (const std::string& a : {std::string("--skeleton"), target.path, std::string("-o"), std::string("out/generated.bvh"),
-                                 std::string("--seconds"), seconds, std::string("--seed"), std::to_string(seed),
-                                 std::string("--model"), model(kind)}) {
-      argv.push_back(a);
-    }
-    const std::vector<std::string> t = threads();
-    argv.insert(argv.end(), t.begin(), t.end());
-    spec.commands.push_back(argv);
-    add_outputs(spec.commands, target, "generated");
+    argv.insert(argv.end(), {"--skeleton", target.path, "--seconds", seconds, "--seed", std::to_string(seed),
+                             "--model", model(kind)});
+    add_motion_commands(spec.commands, std::move(argv), target, "generated");
     return submit(std::move(spec));
   }
 
@@ -296,16 +294,9 @@ struct Studio::State {
       fs::remove_all(spec.folder, ignored);
       throw Refusal(400, user_words(e.what(), source, fs::path(file.filename).filename().string()));
     }
-    std::vector<std::string> argv{options.nec_binary, "transfer", source.filename().string(), "--to", target.path,
-                                  "-o", "out/transferred.bvh"};
-    if (!options.models.empty()) {
-      argv.push_back("--model");
-      argv.push_back((fs::path(options.models) / "gpt" / "tat").string());
-    }
-    const std::vector<std::string> t = threads();
-    argv.insert(argv.end(), t.begin(), t.end());
-    spec.commands.push_back(argv);
-    add_outputs(spec.commands, target, "transferred");
+    std::vector<std::string> argv{options.nec_binary, "transfer", source.filename().string(), "--to", target.path};
+    if (!options.models.empty()) argv.insert(argv.end(), {"--model", (fs::path(options.models) / "gpt" / "tat").string()});
+    add_motion_commands(spec.commands, std::move(argv), target, "transferred");
     return submit(std::move(spec));
   }
 

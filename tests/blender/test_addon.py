@@ -223,7 +223,7 @@ def check_failures(person):
     settings.captions.clear()
     expect_error(bpy.ops.nec.generate, "no caption", "no caption")
     settings.captions.add().text = "?!"
-    expect_error(bpy.ops.nec.generate, "nec generate failed (exit 1): nec: error: the caption: the caption has no letters",
+    expect_error(bpy.ops.nec.generate, "nec generate failed (exit 1): nec: error: the caption: no letters in",
                  "a caption nec refuses")
     settings.source_file = "/no/such/walk.bvh"
     expect_error(bpy.ops.nec.transfer, "/no/such/walk.bvh: no such file", "a missing source file")

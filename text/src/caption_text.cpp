@@ -59,11 +59,11 @@ std::string normalize_caption(std::string_view caption) {
 std::string checked_caption(std::string_view caption, const std::string& where) {
   const std::string text = normalize_caption(caption);
   if (text.empty()) {
-    throw InputError(where, 0, caption.empty() ? "the caption is empty" : "the caption has no letters: '" + std::string(caption) + "'");
+    throw InputError(where, 0, caption.empty() ? "empty" : "no letters in '" + std::string(caption) + "'");
   }
   bool letter = false;
   for (const char c : text) letter = letter || is_ascii_letter(c) || static_cast<unsigned char>(c) >= 0x80;
-  if (!letter) throw InputError(where, 0, "the caption has no letters: '" + std::string(caption) + "'");
+  if (!letter) throw InputError(where, 0, "no letters in '" + std::string(caption) + "'");
   return text;
 }
 

@@ -19,7 +19,7 @@ namespace nec::text {
 std::string normalize_caption(std::string_view caption);
 
 // normalize_caption, refusing what no model can read: InputError(where, 0,
-// "the caption is empty") or "... has no letters: '<caption>'".
+// "empty") or "no letters in '<caption>'".
 std::string checked_caption(std::string_view caption, const std::string& where);
 
 // The words of a normalized caption, or of any text: split on spaces, no empty words.
