@@ -57,6 +57,7 @@ nlohmann::json metrics_json(const GroupResult& g) {
           {"mpjpe_file_units", g.file_units.mpjpe()},
           {"mpjpe_no_translation_file_units", g.file_units.mpjpe_no_translation()},
           {"geodesic_degrees", g.normalized.geodesic_degrees()},
+          {"pose_turn_kept", g.normalized.pose_turn_kept()},
           {"vertical_clips", g.height.ratios.size()},
           {"height_range_kept", g.height.median()}};
 }
@@ -67,9 +68,11 @@ int run_eval_recon(int argc, char** argv) {
   CommandLine cli("nec eval recon",
                   "Reconstruction accuracy on the clips of a split (default: test, never trained on), per dataset:\n"
                   "MPJPE with and without the root trajectory (in skeleton diameters and in the files' units) and\n"
-                  "GeoDist (degrees between decoded and true joint rotations), and the height range kept (the\n"
-                  "root's highest minus lowest height, decoded / real, median over the clips whose root moves up\n"
-                  "or down by 0.05 diameters or more: jumps, sits). Several models give one table.");
+                  "GeoDist (degrees between decoded and true joint rotations), the joints' turning kept (how far\n"
+                  "they turn from the rest pose, decoded / real: 0 for a body that stands still while its root\n"
+                  "travels) and the height range kept (the root's highest minus lowest height, decoded / real,\n"
+                  "median over the clips whose root moves up or down by 0.05 diameters or more: jumps, sits).\n"
+                  "Several models give one table.");
   cli.option("--data", "CACHE", "", "dataset cache (from `nec prepare`)", true);
   cli.option("--models", "CKPTS", "", "comma-separated tokenizer checkpoints (from `nec train tat`)", true);
   cli.option("--split", "SPLIT", "test", "train, val or test");
@@ -97,9 +100,9 @@ int run_eval_recon(int argc, char** argv) {
 
   nlohmann::json results = nlohmann::json::array();
   std::string table =
-      "| dataset | model | tokens/s | clips | MPJPE | MPJPE no trans. | MPJPE (file units) | GeoDist (deg) | height "
+      "| dataset | model | tokens/s | clips | MPJPE | MPJPE no trans. | MPJPE (file units) | GeoDist (deg) | turning kept | height "
       "range kept (clips) |\n"
-      "|---|---|---|---|---|---|---|---|---|\n";
+      "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const std::string& path : cli.list("--models")) {
     TokenizerOptions options = tokenizer_options(cli);
     options.model = path;
@@ -142,15 +145,16 @@ int run_eval_recon(int argc, char** argv) {
       results.push_back(row);
       const std::string skipped = group.skipped ? fmt::format(" (+{} skipped: J > {})", group.skipped, config.max_joints) : "";
       if (group.clips == 0) {
-        table += fmt::format("| {} | {} | {:.0f} | 0{} | - | - | - | - | - |\n", dataset, tat::to_string(config.kind),
+        table += fmt::format("| {} | {} | {:.0f} | 0{} | - | - | - | - | - | - |\n", dataset, tat::to_string(config.kind),
                              tokens_per_second, skipped);
       } else {
         const std::string height =
             group.height.ratios.empty() ? "- (0)" : fmt::format("{:.2f} ({})", group.height.median(), group.height.ratios.size());
-        table += fmt::format("| {} | {} | {:.0f} | {}{} | {:.4f} | {:.4f} | {:.4g} | {:.2f} | {} |\n", dataset,
+        table += fmt::format("| {} | {} | {:.0f} | {}{} | {:.4f} | {:.4f} | {:.4g} | {:.2f} | {:.2f} | {} |\n", dataset,
                              tat::to_string(config.kind), tokens_per_second, group.clips, skipped,
                              group.normalized.mpjpe(), group.normalized.mpjpe_no_translation(),
-                             group.file_units.mpjpe(), group.normalized.geodesic_degrees(), height);
+                             group.file_units.mpjpe(), group.normalized.geodesic_degrees(),
+                             group.normalized.pose_turn_kept(), height);
       }
     }
   }

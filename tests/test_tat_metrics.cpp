@@ -1,7 +1,8 @@
-// How much vertical motion a decoded clip keeps.
+// How much of the joints' turning and of the vertical motion a decoded clip keeps.
 #include "nec/tat/metrics.h"
 
 #include <gtest/gtest.h>
+#include <torch/torch.h>
 
 #include <cmath>
 
@@ -9,6 +10,45 @@ namespace nec {
 namespace {
 
 using tat::HeightRangeKept;
+using tat::ReconstructionMetrics;
+
+// Θ (1, T, 3, 9) of a root, a joint turning about X by degrees[t] at frame t, and a padding joint; the root
+// turns about Y by root_degrees at every frame.
+at::Tensor turning_clip(const std::vector<double>& degrees, double root_degrees = 0.0) {
+  const int64_t t = static_cast<int64_t>(degrees.size());
+  at::Tensor f = torch::zeros({1, t, 3, 9});
+  const auto set = [&](int64_t frame, int64_t joint, double angle, bool about_y) {
+    const double c = std::cos(angle * M_PI / 180.0), s = std::sin(angle * M_PI / 180.0);
+    // rot6D: the first two columns of the rotation matrix.
+    const std::vector<double> six = about_y ? std::vector<double>{c, 0, -s, 0, 1, 0} : std::vector<double>{1, 0, 0, 0, c, s};
+    for (int k = 0; k < 6; ++k) f[0][frame][joint][3 + k] = six[static_cast<size_t>(k)];
+  };
+  for (int64_t frame = 0; frame < t; ++frame) {
+    set(frame, 0, root_degrees, true);
+    set(frame, 1, degrees[static_cast<size_t>(frame)], false);
+    set(frame, 2, 90.0, false);  // padding: never counted
+  }
+  return f;
+}
+
+double turning_kept(const at::Tensor& prediction, const at::Tensor& truth) {
+  ReconstructionMetrics m;
+  const at::Tensor parents = torch::tensor({-1L, 0L, 1L}).view({1, 3});
+  const at::Tensor offsets = torch::tensor({0.0f, 0.0f, 0.0f, 0.0f, 0.3f, 0.0f, 0.0f, 0.3f, 0.0f}).view({1, 3, 3});
+  const at::Tensor joints = torch::tensor({true, true, false}).view({1, 3});
+  m.add(prediction, truth, parents, offsets, joints, torch::ones({1, truth.size(1)}, torch::kBool));
+  return m.pose_turn_kept();
+}
+
+TEST(ReconstructionMetrics, TurningKeptIsZeroForAStillBodyAndOneForTheRealMotion) {
+  const at::Tensor wave = turning_clip({0, 20, 40, 60, 40, 20});
+  EXPECT_NEAR(turning_kept(wave, wave), 1.0, 1e-6);
+  EXPECT_NEAR(turning_kept(turning_clip({0, 0, 0, 0, 0, 0}), wave), 0.0, 1e-6);
+  EXPECT_NEAR(turning_kept(turning_clip({0, 10, 20, 30, 20, 10}), wave), 0.5, 1e-6);
+  // The root's own turning is its heading and lean, not the pose: a turning root keeps nothing.
+  EXPECT_NEAR(turning_kept(turning_clip({0, 0, 0, 0, 0, 0}, 45.0), wave), 0.0, 1e-6);
+  EXPECT_EQ(ReconstructionMetrics{}.pose_turn_kept(), 0.0);  // nothing added yet
+}
 
 // Θ of a one-joint clip whose root stands at heights[t] (Δy per frame; frame 0 holds the height).
 Features clip_at_heights(const std::vector<double>& heights) {

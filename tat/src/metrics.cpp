@@ -1,4 +1,4 @@
-// MPJPE and GeoDist on masked batches.
+// MPJPE, GeoDist and the joints' turning kept on masked batches.
 #include "nec/tat/metrics.h"
 
 #include "nec/motion/statistics.h"
@@ -27,7 +27,12 @@ void ReconstructionMetrics::add(const at::Tensor& prediction, const at::Tensor& 
   const at::Tensor r_pred = rot6d_to_matrix(prediction.slice(-1, 3, 9).to(torch::kFloat64));
   const at::Tensor r_true = rot6d_to_matrix(features.slice(-1, 3, 9).to(torch::kFloat64));
   const at::Tensor trace = (r_pred * r_true).sum({-1, -2});  // tr(R̂ᵀ R)
-  const at::Tensor angle = ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos() * (180.0 / M_PI);
+  const auto degrees = [](const at::Tensor& traces) { return ((traces - 1.0) / 2.0).clamp(-1.0, 1.0).acos() * (180.0 / M_PI); };
+  const at::Tensor angle = degrees(trace);
+  // The rest pose is the identity: a rotation's trace alone gives its angle.
+  const at::Tensor joints = mask.slice(2, 1);
+  predicted_turn_sum += (degrees(r_pred.slice(2, 1).diagonal(0, -2, -1).sum(-1)) * joints).sum().item<double>();
+  true_turn_sum += (degrees(r_true.slice(2, 1).diagonal(0, -2, -1).sum(-1)) * joints).sum().item<double>();
   position_error_sum += scale * (world * mask).sum().item<double>();
   local_position_error_sum += scale * (local * mask).sum().item<double>();
   angle_error_sum += (angle * mask).sum().item<double>();
@@ -39,6 +44,8 @@ void ReconstructionMetrics::add(const ReconstructionMetrics& other) {
   local_position_error_sum += other.local_position_error_sum;
   angle_error_sum += other.angle_error_sum;
   count += other.count;
+  predicted_turn_sum += other.predicted_turn_sum;
+  true_turn_sum += other.true_turn_sum;
 }
 
 namespace {

@@ -260,7 +260,8 @@ train::TrainingHooks TatTrainer::hooks(const std::string& out_dir) {
     const std::optional<ReconstructionMetrics> metrics = validate();
     return train::LossTerms{{"val_mpjpe", metrics->mpjpe()},
                             {"val_mpjpe_no_trans", metrics->mpjpe_no_translation()},
-                            {"val_geodesic_deg", metrics->geodesic_degrees()}};
+                            {"val_geodesic_deg", metrics->geodesic_degrees()},
+                            {"val_turning_kept", metrics->pose_turn_kept()}};
   };
   hooks.checkpoint = [this, out_dir](int64_t step) { save(out_dir, step); };
   return hooks;

@@ -1,6 +1,6 @@
 // Reconstruction metrics (NECromancer appendix D): MPJPE with and without the
-// root trajectory, and GeoDist, on batches of Θ with masks; and how much of a
-// clip's vertical motion comes back.
+// root trajectory, and GeoDist, on batches of Θ with masks; how much of the joints' turning and of a clip's
+// vertical motion comes back.
 //
 //   ReconstructionMetrics m;
 //   m.add(prediction, target.features, target.parents, target.offsets, target.joint_mask, target.frame_mask);
@@ -24,6 +24,10 @@ struct ReconstructionMetrics {
   double local_position_error_sum = 0; // Σ |(p̂ - p̂_root) - (p - p_root)| (no root translation)
   double angle_error_sum = 0;          // Σ geodesic angle (degrees) between predicted and true rotations
   int64_t count = 0;                   // joints × frames summed
+  // Σ angle (degrees) of the joints' local rotations away from the rest pose, root excluded: a decoder that
+  // answers with the rest pose (a body standing still while its root travels) keeps 0 of the real turning
+  // and still scores a GeoDist no worse than the clips' own spread.
+  double predicted_turn_sum = 0, true_turn_sum = 0;
 
   // prediction, features (B, T, J, 9); parents (B, J); offsets (B, J, 3);
   // joint_mask (B, J) and frame_mask (B, T) bool. `scale` multiplies the
@@ -35,6 +39,8 @@ struct ReconstructionMetrics {
   double mpjpe() const { return count ? position_error_sum / count : 0.0; }
   double mpjpe_no_translation() const { return count ? local_position_error_sum / count : 0.0; }
   double geodesic_degrees() const { return count ? angle_error_sum / count : 0.0; }
+  // How much the joints turn away from the rest pose, decoded / real (1: as much as the real motion; 0: still).
+  double pose_turn_kept() const { return true_turn_sum > 0 ? predicted_turn_sum / true_turn_sum : 0.0; }
 };
 
 // The range of the root's height (highest minus lowest, over the clip) of decoded clips divided by their
