@@ -73,8 +73,9 @@ def read_config(configs):
         "commitment_weight": quantizer.get("commitment_weight", 0.02),
         "dead_code_threshold": quantizer.get("dead_code_threshold", 1.0),
         "quantize_dropout": quantizer.get("quantize_dropout", 0.2),
-        "loss": {k: loss.get(k, d) for k, d in (("rotation", 1.0), ("root", 1.0), ("position", 1.0),
-                                                ("velocity", 0.5), ("vertical", 4.0))},
+        "loss": {k: loss.get(k, d) for k, d in (("rotation", 1.0), ("root", 0.02), ("position", 0.0),
+                                                ("velocity", 0.0), ("vertical", 0.08),
+                                                ("positions_from_step", 0))},
         "learning_rate": optimizer.get("learning_rate", 2e-4),
         "final_lr_fraction": optimizer.get("final_lr_fraction", 0.1),
         "warmup_steps": optimizer.get("warmup_steps", 200),
@@ -527,12 +528,24 @@ def masked_l1(a, b, weight):
     return ((a - b).abs() * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0)
 
 
+def masked_squared(a, b, weight):
+    count = weight.sum() * float(a.size(-1))
+    return ((a - b).square() * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0)
+
+
+def loss_weights_at(w, step):
+    """LossWeights::at_step: the positions' and velocities' terms count from positions_from_step on."""
+    if step >= w["positions_from_step"]:
+        return w
+    return dict(w, position=0.0, velocity=0.0)
+
+
 def reconstruction_loss(prediction, x, commitment, w):
     b, t, j = prediction.shape[:3]
     frame = x["frame_mask"].to(prediction.dtype)
     real = frame.view(b, t, 1) * x["joint_mask"].to(prediction.dtype).view(b, 1, j)
     target = x["features"]
-    rotation = masked_l1(prediction.narrow(-1, 3, 6), target.narrow(-1, 3, 6), real)
+    rotation = masked_squared(prediction.narrow(-1, 3, 6), target.narrow(-1, 3, 6), real)
     root_motion = [features_to_model_space(f[:, :, :1]).select(2, 0)[..., [0, 1, 2, 9]] for f in (prediction, target)]
     root = masked_l1(root_motion[0], root_motion[1], frame)
     predicted = features_to_positions(prediction, x["parents"], x["offsets"])
@@ -590,7 +603,7 @@ class Trainee(ScheduledTrainee):
         x = self.x
         reconstruction, _, commitment, perplexity = self.model(x["features"], x["joint_mask"], x["frame_mask"],
                                                                x["embeddings"])
-        total, _ = reconstruction_loss(reconstruction, x, commitment, self.c["loss"])
+        total, _ = reconstruction_loss(reconstruction, x, commitment, loss_weights_at(self.c["loss"], self.steps))
         self.optimizer.zero_grad()
         total.backward()
         self.optimizer_step(lr)

@@ -181,6 +181,44 @@ TEST(TatLoss, PaddingIsExcluded) {
   EXPECT_TRUE(torch::isfinite(grad).all().item<bool>());
 }
 
+// The rotations' term is the mean squared error over the 6 channels of every real joint and frame: an error
+// twice as large costs four times as much (under an L1 the tokenizers learnt a still body).
+TEST(TatLoss, RotationIsTheMeanSquaredError) {
+  const Fixture f = two_clips();
+  const auto [inner, leaf] = inner_joint_and_leaf(f.skeletons[0]);
+  const double real_entries = f.batch.joint_mask.sum(1).mul(f.batch.frame_mask.sum(1)).sum().item<double>() * 6.0;
+  for (const double error : {0.1, 0.2}) {
+    at::Tensor p = f.batch.features.clone();
+    p[0][3][leaf][4].add_(error);
+    p[1][2][inner][7].sub_(error);
+    EXPECT_NEAR(loss_of(p, f.batch).rotation, 2.0 * error * error / real_entries, 1e-9) << "error " << error;
+  }
+}
+
+// Before positions_from_step the positions and velocities do not count; from it on every weight is as set.
+TEST(TatLoss, PositionsJoinAtTheirStep) {
+  LossWeights w;
+  w.position = 0.1;
+  w.velocity = 0.05;
+  w.positions_from_step = 1500;
+  for (const int64_t step : {int64_t{1}, int64_t{1499}}) {
+    const LossWeights before = w.at_step(step);
+    EXPECT_EQ(before.position, 0.0) << step;
+    EXPECT_EQ(before.velocity, 0.0) << step;
+    EXPECT_EQ(before.rotation, w.rotation) << step;
+    EXPECT_EQ(before.root, w.root) << step;
+    EXPECT_EQ(before.vertical, w.vertical) << step;
+  }
+  for (const int64_t step : {int64_t{1500}, int64_t{2000}}) {
+    EXPECT_EQ(w.at_step(step).position, 0.1) << step;
+    EXPECT_EQ(w.at_step(step).velocity, 0.05) << step;
+  }
+  w.positions_from_step = 0;
+  EXPECT_EQ(w.at_step(1).position, 0.1);
+  w.positions_from_step = -1;
+  EXPECT_THROW(w.validate(), std::invalid_argument);
+}
+
 TEST(TatLoss, WeightsScaleTheirTerms) {
   const Fixture f = two_clips();
   at::Tensor p = f.batch.features.clone();

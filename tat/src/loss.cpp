@@ -1,4 +1,4 @@
-// Masked reconstruction loss of the tokenizer: rot6D, root displacement, the root's vertical velocity, FK
+// Masked reconstruction loss of the tokenizer: rot6D (squared error), root displacement, the root's vertical velocity, FK
 // positions and velocities, plus the quantizer's commitment loss.
 #include "nec/tat/loss.h"
 
@@ -26,14 +26,31 @@ at::Tensor masked_l1(const at::Tensor& a, const at::Tensor& b, const at::Tensor&
   return ((a - b).abs() * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0);
 }
 
+// Mean of (a - b)² over the same entries. The rotations' term is squared: under an L1 every joint's error pulls
+// with the same force however small, and the tokenizers learnt each joint's median pose, a still body
+// (docs/tokenizer.md, "Why: an L1 on the rotations").
+at::Tensor masked_squared(const at::Tensor& a, const at::Tensor& b, const at::Tensor& weight) {
+  const int64_t channels = a.size(-1);
+  const at::Tensor count = weight.sum() * static_cast<double>(channels);
+  return ((a - b).square() * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0);
+}
+
 }  // namespace
 
 void visit_fields(train::ConfigVisitor& v, LossWeights& c) {
-  v.field("rotation", c.rotation, "weight of the L1 on the joints' rotations");
+  v.field("rotation", c.rotation, "weight of the squared error on the joints' rotations (rot6D)");
   v.field("root", c.root, "weight of the L1 on the root's motion");
   v.field("position", c.position, "weight of the L1 on world joint positions");
   v.field("velocity", c.velocity, "weight of the L1 on joint velocities");
   v.field("vertical", c.vertical, "weight of the L1 on the root's vertical velocity");
+  v.added_field("positions_from_step", c.positions_from_step,
+          "step from which the position and velocity terms count (0 = from the first); the rotations lead before");
+}
+
+LossWeights LossWeights::at_step(int64_t step) const {
+  LossWeights weights = *this;
+  if (step < positions_from_step) weights.position = weights.velocity = 0.0;
+  return weights;
 }
 
 void LossWeights::validate() const {
@@ -42,6 +59,10 @@ void LossWeights::validate() const {
   require_weight(position, "position");
   require_weight(velocity, "velocity");
   require_weight(vertical, "vertical");
+  if (positions_from_step < 0) {
+    throw std::invalid_argument("LossWeights: positions_from_step must be >= 0, got " +
+                                std::to_string(positions_from_step));
+  }
 }
 
 ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const BatchTensors& target,
@@ -56,7 +77,7 @@ ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const Batch
   const at::Tensor real = frame.view({b, t, 1}) * target.joint_mask.to(type).view({b, 1, j});  // (B, T, J)
 
   const at::Tensor rotation =
-      masked_l1(prediction.narrow(-1, 3, 6), target.features.narrow(-1, 3, 6), real);
+      masked_squared(prediction.narrow(-1, 3, 6), target.features.narrow(-1, 3, 6), real);
   // The root's motion as the networks predict it (model space: body-frame Δ and yaw rate, scaled).
   const auto root_motion = [](const at::Tensor& features) {
     const at::Tensor root = features_to_model_space(features.narrow(2, 0, 1)).select(2, 0);  // (B, T, 10)

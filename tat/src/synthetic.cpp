@@ -48,7 +48,8 @@ double synthetic_train_step(TokenizerImpl& model, torch::optim::Optimizer& optim
   model.train();
   const BatchTensors& x = inputs.batch;
   const TokenizerOutput out = model.forward(x.features, x.joint_mask, x.frame_mask, inputs.embeddings);
-  const ReconstructionLoss loss = reconstruction_loss(out.reconstruction, x, out.commitment_loss, config.loss);
+  const ReconstructionLoss loss =
+      reconstruction_loss(out.reconstruction, x, out.commitment_loss, config.loss.at_step(step));
   optimizer.zero_grad();
   loss.total.backward();
   train::optimizer_step(optimizer, model.parameters(), config.optimizer.grad_clip, lr);

@@ -207,7 +207,8 @@ LossTerms TatTrainer::step_on(const Batch& batch, int64_t step) {
   LossTerms terms;
   if (batch.size > 0) {
     const Inputs in = inputs(batch);
-    terms = backward_in_parts(tokenizer_, in.batch, in.embeddings, config_.loss, config_.max_joint_frames, share);
+    terms = backward_in_parts(tokenizer_, in.batch, in.embeddings, config_.loss.at_step(step),
+                              config_.max_joint_frames, share);
   }
   const train::OptimizerStep taken = train::optimizer_step(*optimizer_, tokenizer_->parameters(), config_.optimizer.grad_clip,
                                                            lr, ranks_);
