@@ -523,14 +523,13 @@ def features_to_positions(features, parents, offsets):
 
 # ---- Loss (loss.cpp) ----
 
+def masked_mean(error, weight):
+    count = weight.sum() * float(error.size(-1))
+    return (error * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0)
+
+
 def masked_l1(a, b, weight):
-    count = weight.sum() * float(a.size(-1))
-    return ((a - b).abs() * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0)
-
-
-def masked_squared(a, b, weight):
-    count = weight.sum() * float(a.size(-1))
-    return ((a - b).square() * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0)
+    return masked_mean((a - b).abs(), weight)
 
 
 def loss_weights_at(w, step):
@@ -545,7 +544,7 @@ def reconstruction_loss(prediction, x, commitment, w):
     frame = x["frame_mask"].to(prediction.dtype)
     real = frame.view(b, t, 1) * x["joint_mask"].to(prediction.dtype).view(b, 1, j)
     target = x["features"]
-    rotation = masked_squared(prediction.narrow(-1, 3, 6), target.narrow(-1, 3, 6), real)
+    rotation = masked_mean((prediction.narrow(-1, 3, 6) - target.narrow(-1, 3, 6)).square(), real)
     root_motion = [features_to_model_space(f[:, :, :1]).select(2, 0)[..., [0, 1, 2, 9]] for f in (prediction, target)]
     root = masked_l1(root_motion[0], root_motion[1], frame)
     predicted = features_to_positions(prediction, x["parents"], x["offsets"])

@@ -1,5 +1,5 @@
-// Masked reconstruction loss of the tokenizer: rot6D (squared error), root displacement, the root's vertical velocity, FK
-// positions and velocities, plus the quantizer's commitment loss.
+// Masked reconstruction loss of the tokenizer: rot6D (squared error), root displacement, the root's vertical
+// velocity, FK positions and velocities, plus the quantizer's commitment loss.
 #include "nec/tat/loss.h"
 
 #include "nec/tat/fk.h"
@@ -19,20 +19,14 @@ void require_weight(double value, const char* name) {
                                                    std::to_string(value));
 }
 
-// Mean of |a - b| over the entries where weight (broadcast to a) is 1: sum / (count * channels).
-at::Tensor masked_l1(const at::Tensor& a, const at::Tensor& b, const at::Tensor& weight) {
-  const int64_t channels = a.size(-1);
-  const at::Tensor count = weight.sum() * static_cast<double>(channels);
-  return ((a - b).abs() * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0);
+// Mean of an error (..., C) over the entries where weight (its leading dimensions) is 1: sum / (count * C).
+at::Tensor masked_mean(const at::Tensor& error, const at::Tensor& weight) {
+  const at::Tensor count = weight.sum() * static_cast<double>(error.size(-1));
+  return (error * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0);
 }
 
-// Mean of (a - b)² over the same entries. The rotations' term is squared: under an L1 every joint's error pulls
-// with the same force however small, and the tokenizers learnt each joint's median pose, a still body
-// (docs/tokenizer.md, "Why: an L1 on the rotations").
-at::Tensor masked_squared(const at::Tensor& a, const at::Tensor& b, const at::Tensor& weight) {
-  const int64_t channels = a.size(-1);
-  const at::Tensor count = weight.sum() * static_cast<double>(channels);
-  return ((a - b).square() * weight.unsqueeze(-1)).sum() / count.clamp_min(1.0);
+at::Tensor masked_l1(const at::Tensor& a, const at::Tensor& b, const at::Tensor& weight) {
+  return masked_mean((a - b).abs(), weight);
 }
 
 }  // namespace
@@ -44,7 +38,7 @@ void visit_fields(train::ConfigVisitor& v, LossWeights& c) {
   v.field("velocity", c.velocity, "weight of the L1 on joint velocities");
   v.field("vertical", c.vertical, "weight of the L1 on the root's vertical velocity");
   v.added_field("positions_from_step", c.positions_from_step,
-          "step from which the position and velocity terms count (0 = from the first); the rotations lead before");
+                "step from which the position and velocity terms count (0 = from the first); the rotations lead before");
 }
 
 LossWeights LossWeights::at_step(int64_t step) const {
@@ -76,8 +70,10 @@ ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const Batch
   const at::Tensor frame = target.frame_mask.to(type);                                     // (B, T)
   const at::Tensor real = frame.view({b, t, 1}) * target.joint_mask.to(type).view({b, 1, j});  // (B, T, J)
 
+  // Squared: under an L1 every joint's error pulls with the same force however small, and the tokenizers learnt
+  // each joint's median pose, a still body (docs/tokenizer.md, "Why: an L1 on the rotations").
   const at::Tensor rotation =
-      masked_squared(prediction.narrow(-1, 3, 6), target.features.narrow(-1, 3, 6), real);
+      masked_mean((prediction.narrow(-1, 3, 6) - target.features.narrow(-1, 3, 6)).square(), real);
   // The root's motion as the networks predict it (model space: body-frame Δ and yaw rate, scaled).
   const auto root_motion = [](const at::Tensor& features) {
     const at::Tensor root = features_to_model_space(features.narrow(2, 0, 1)).select(2, 0);  // (B, T, 10)
@@ -93,11 +89,18 @@ ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const Batch
     vertical = masked_l1(rise(prediction), rise(target.features), frame.narrow(1, 1, t - 1) * frame.narrow(1, 0, t - 1));
   }
 
-  const at::Tensor predicted_positions = features_to_positions(prediction, target.parents, target.offsets).positions;
-  at::Tensor target_positions;
+  // Before positions_from_step the positions' terms weigh 0: they are still logged, but FK's backward is skipped.
+  const bool positions_count = weights.position > 0.0 || weights.velocity > 0.0;
+  at::Tensor predicted_positions, target_positions;
   {
     torch::NoGradGuard no_grad;
     target_positions = features_to_positions(target.features, target.parents, target.offsets).positions;
+    if (!positions_count) {
+      predicted_positions = features_to_positions(prediction, target.parents, target.offsets).positions;
+    }
+  }
+  if (positions_count) {
+    predicted_positions = features_to_positions(prediction, target.parents, target.offsets).positions;
   }
   const at::Tensor position = masked_l1(predicted_positions, target_positions, real);
   at::Tensor velocity = torch::zeros({}, prediction.options());
