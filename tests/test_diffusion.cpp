@@ -2,7 +2,8 @@
 // RestPE; windows of long motions (a window's own frame is the crop's, on a
 // turning walk); the denoiser's masks, adaLN-Zero start and independent
 // frames of the pose model; sampling repeats by seed, sample by sample; and
-// a tiny denoiser learns which motion each caption means.
+// a tiny denoiser learns which motion each caption means, and its samples
+// swing as far as the real motions (none before it learns).
 #include "nec/diffusion/denoiser.h"
 #include "nec/diffusion/noise_schedule.h"
 #include "nec/diffusion/sampling.h"
@@ -11,6 +12,7 @@
 #include "nec/diffusion/windows.h"
 #include "nec/motion/features.h"
 #include "nec/motion/files.h"
+#include "nec/tat/batch_tensors.h"
 #include "nec/tat/model_space.h"
 #include "nec/train/config_fields.h"
 #include "test_support.h"
@@ -330,6 +332,29 @@ TEST(DiffusionLearning, ATinyDenoiserLearnsWhichMotionEachCaptionMeans) {
   };
   const at::Tensor a = motion_of(1.0), b = motion_of(-1.0);
   model->fit_statistics({a, b});
+  // The two motions as a batch of real clips (Θ), to measure how much of their swing whole samples keep.
+  tat::BatchTensors truth;
+  truth.features = tat::model_space_to_features(torch::stack({a, b}), torch::zeros({2}));
+  truth.joint_mask = torch::ones({2, 5}, torch::kBool);
+  truth.frame_mask = torch::ones({2, 8}, torch::kBool);
+  truth.parents = torch::tensor({-1, 0, 1, 0, 3}, torch::kInt64).view({1, 5}).expand({2, 5}).clone();
+  truth.offsets = torch::randn({2, 5, 3}) * 0.2;
+  diffusion::DiffusionSamplingOptions options;
+  options.steps = 20;
+  options.guidance = 2.0;
+  const auto turning_kept = [&] {
+    model->eval();
+    at::Tensor conditions;
+    {
+      torch::NoGradGuard no_grad;
+      conditions = model->caption_condition(piece_batch({{2}, {3}}), {});
+    }
+    return diffusion::sampled_turning(*model, schedule, truth, skeletons.select(torch::zeros({2}, torch::kInt64)),
+                                      conditions, options)
+        .pose_turn_kept();
+  };
+  // Untrained, the output layer is zero: every sample is the data's mean, joint 1 at rest.
+  EXPECT_LT(turning_kept(), 0.05);
   const at::Tensor x0 = model->standardize(torch::stack({a, b, a, b, a, b, a, b}));
   const at::Tensor used = diffusion::channel_mask(skeletons.joint_mask).unsqueeze(1).expand({8, 8, 5, kC});
   const text::TextBatch captions = piece_batch({{2}, {3}, {2}, {3}, {2}, {3}, {2}, {3}});
@@ -349,15 +374,15 @@ TEST(DiffusionLearning, ATinyDenoiserLearnsWhichMotionEachCaptionMeans) {
     last = loss.item<double>();
   }
   EXPECT_LT(last, 0.5 * first);
-  model->eval();
+  // Trained, the samples swing about as far as the real motions do.
+  const double kept = turning_kept();
+  EXPECT_GT(kept, 0.6);
+  EXPECT_LT(kept, 2.0);  // guidance 2 swings a little wider than the data (1.27 seen)
   at::Tensor conditions;
   {
     torch::NoGradGuard no_grad;
     conditions = model->caption_condition(piece_batch({{2}, {3}}), {});
   }
-  diffusion::DiffusionSamplingOptions options;
-  options.steps = 20;
-  options.guidance = 2.0;
   int right = 0;
   for (int64_t c = 0; c < 2; ++c) {
     const auto samples = diffusion::sample_motions(*model, schedule, one, conditions.narrow(0, c, 1), {8}, 4, options);

@@ -2,6 +2,7 @@
 #include "nec/diffusion/sampling.h"
 
 #include "nec/diffusion/windows.h"
+#include "nec/tat/batch_tensors.h"
 #include "nec/tat/model_space.h"
 
 #include <ATen/CPUGeneratorImpl.h>
@@ -108,6 +109,24 @@ std::vector<at::Tensor> sample_motions(MotionDenoiserImpl& model, const NoiseSch
   std::vector<at::Tensor> out;
   for (int s = 0; s < samples; ++s) out.push_back(motion[s].clone());
   return out;
+}
+
+tat::ReconstructionMetrics sampled_turning(MotionDenoiserImpl& model, const NoiseSchedule& schedule,
+                                           const tat::BatchTensors& truth, const SkeletonInputs& skeletons,
+                                           const at::Tensor& captions, const DiffusionSamplingOptions& options) {
+  tat::ReconstructionMetrics metrics;
+  for (int64_t i = 0; i < truth.features.size(0); ++i) {
+    const tat::BatchTensors clip = truth.items(i, 1);
+    const int64_t frames = clip.frame_mask.sum().item<int64_t>();
+    if (frames == 0) continue;
+    const at::Tensor row = torch::full({1}, i, torch::kInt64);
+    const at::Tensor motion =
+        sample_motions(model, schedule, skeletons.select(row), captions.narrow(0, i, 1), {frames}, 1, options).front();
+    const at::Tensor theta = tat::model_space_to_features(motion.unsqueeze(0), torch::zeros({1}, motion.options()));
+    metrics.add(theta, clip.features.narrow(1, 0, frames), clip.parents, clip.offsets, clip.joint_mask,
+                clip.frame_mask.narrow(1, 0, frames));
+  }
+  return metrics;
 }
 
 }  // namespace nec::diffusion

@@ -2,6 +2,7 @@
 #include "nec/diffusion/training.h"
 
 #include "nec/diffusion/objective.h"
+#include "nec/diffusion/sampling.h"
 
 #include "nec/motion/error.h"
 #include "nec/motion/files.h"
@@ -9,6 +10,7 @@
 #include "nec/owo/checkpoint.h"
 #include "nec/tat/batch_tensors.h"
 #include "nec/tat/inference.h"
+#include "nec/tat/metrics.h"
 #include "nec/tat/model_space.h"
 #include "nec/train/checkpoint_io.h"
 #include "nec/train/config_fields.h"
@@ -36,6 +38,8 @@ constexpr int kValidationBatch = 16;
 constexpr int kValidationBatches = 4;      // the val loss reads at most this many batches
 constexpr size_t kStatisticsClips = 512;   // data statistics from at most this many train clips
 constexpr uint64_t kValidationSeed = 0x76616c6964ull;
+constexpr int64_t kSampledClips = 6;        // validation samples clips spread over the val split whole ...
+constexpr int64_t kSampledSteps = 20;       // ... with this many DDIM steps (guidance as generation's default)
 // A dropped caption still goes through the text encoder (then is replaced): any valid caption does.
 constexpr const char* kPlaceholderCaption = "motion";
 
@@ -177,10 +181,25 @@ int64_t DiffusionTrainer::trained_parameter_count() const {
   return count;
 }
 
+SkeletonInputs DiffusionTrainer::skeleton_inputs(const Batch& batch, const tat::BatchTensors& x) {
+  return make_skeleton_inputs(x.parents, x.offsets, x.joint_mask, skeleton_embeddings_->embed(batch).to(device_));
+}
+
+DenoisingCaptions DiffusionTrainer::read_captions(const Batch& batch, const std::function<bool(int64_t)>& drop) {
+  std::vector<std::string> captions;
+  std::vector<int64_t> dropped;
+  for (int64_t i = 0; i < batch.size; ++i) {
+    const std::string& caption = batch.captions[static_cast<size_t>(i)];
+    captions.push_back(caption.empty() ? kPlaceholderCaption : caption);
+    dropped.push_back(caption.empty() || drop(i) ? 1 : 0);
+  }
+  return {captions_.read(captions, vectors_, data_name_ + " captions").to(device_),
+          torch::tensor(dropped, torch::kInt64).to(torch::kBool).to(device_)};
+}
+
 at::Tensor DiffusionTrainer::loss_of(const Batch& batch, bool validation, uint64_t draw_seed) {
   const tat::BatchTensors x = tat::to_tensors(batch).to(device_);
-  const at::Tensor joints = skeleton_embeddings_->embed(batch).to(device_);
-  const SkeletonInputs skeletons = make_skeleton_inputs(x.parents, x.offsets, x.joint_mask, joints);
+  const SkeletonInputs skeletons = skeleton_inputs(batch, x);
   const int64_t b = batch.size;
   // Each item draws its timestep, noise, frames and caption dropout from a stream of its own, seeded by
   // the step (or validation) and its place in the whole batch: a rank's share draws what one process would.
@@ -219,17 +238,11 @@ at::Tensor DiffusionTrainer::loss_of(const Batch& batch, bool validation, uint64
   }
   drawn.noise = torch::stack(noises).to(device_);
 
-  std::vector<std::string> captions;
-  std::vector<int64_t> dropped;
   const at::Tensor draws = per_item([](at::Generator& g) { return torch::rand({1}, g); }).view({-1}).cpu();
-  for (int64_t i = 0; i < b; ++i) {
-    const std::string& caption = batch.captions[static_cast<size_t>(i)];
-    const bool drop = caption.empty() || (!validation && draws[i].item<double>() < config_.caption_dropout);
-    captions.push_back(caption.empty() ? kPlaceholderCaption : caption);
-    dropped.push_back(drop ? 1 : 0);
-  }
-  drawn.text = captions_.read(captions, vectors_, data_name_ + " captions").to(device_);
-  drawn.drop_text = torch::tensor(dropped, torch::kInt64).to(torch::kBool).to(device_);
+  DenoisingCaptions read = read_captions(
+      batch, [&](int64_t i) { return !validation && draws[i].item<double>() < config_.caption_dropout; });
+  drawn.text = std::move(read.text);
+  drawn.drop_text = read.dropped;
   drawn.global_items = validation ? b : batch.global_size;
   return denoising_objective(*model_, schedule_, drawn, stage_, config_.velocity_weight);
 }
@@ -266,8 +279,22 @@ std::optional<train::LossTerms> DiffusionTrainer::validate() {
   for (int index = 0; index < std::min(kValidationBatches, validation_->batches_per_epoch()); ++index, ++batches) {
     total += loss_of(validation_->batch(0, index), true, mix64(kValidationSeed ^ static_cast<uint64_t>(index))).item<double>();
   }
+  // Clips spread over the val split sampled whole from their captions: do the bodies move as the real ones do?
+  tat::ReconstructionMetrics turning;
+  DiffusionSamplingOptions options;
+  options.steps = kSampledSteps;
+  options.seed = kValidationSeed;
+  const int64_t batches_in_split = validation_->batches_per_epoch();
+  for (int64_t k = 0; k < std::min(kSampledClips, batches_in_split); ++k) {
+    const Batch batch = validation_->batch(0, static_cast<int>(k * batches_in_split / kSampledClips));
+    const tat::BatchTensors x = tat::to_tensors(batch).to(device_);
+    const DenoisingCaptions captions = read_captions(batch, [](int64_t) { return false; });
+    const at::Tensor first = torch::zeros({1}, torch::kInt64);
+    turning.add(sampled_turning(*model_, schedule_, x.items(0, 1), skeleton_inputs(batch, x).select(first),
+                                model_->caption_condition(captions.text, captions.dropped).narrow(0, 0, 1), options));
+  }
   train_mode();
-  return train::LossTerms{{"val_loss", total / std::max(1, batches)}};
+  return train::LossTerms{{"val_loss", total / std::max(1, batches)}, {"val_sampled_turning_kept", turning.pose_turn_kept()}};
 }
 
 train::TrainingSchedule DiffusionTrainer::loop_schedule() const {

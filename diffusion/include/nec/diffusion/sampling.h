@@ -15,11 +15,16 @@
 
 #include "nec/diffusion/denoiser.h"
 #include "nec/diffusion/noise_schedule.h"
+#include "nec/tat/metrics.h"
 
 #include <ATen/core/Tensor.h>
 
 #include <cstdint>
 #include <vector>
+
+namespace nec::tat {
+struct BatchTensors;
+}
 
 namespace nec::diffusion {
 
@@ -41,6 +46,16 @@ std::vector<at::Tensor> sample_motions(MotionDenoiserImpl& model, const NoiseSch
                                        const SkeletonInputs& skeleton, const at::Tensor& captions,
                                        const std::vector<int64_t>& segment_frames, int samples,
                                        const DiffusionSamplingOptions& options);
+
+// The joints' turning (away from the rest pose) of motions sampled on real clips' skeletons from their
+// captions, beside the clips' own: pose_turn_kept() of the result is Σ sampled / Σ real (0: bodies that stand
+// still, 1: as much as the real ones). The x0 loss hardly tells: at most noise levels its best answer is near
+// the mean pose, and a model whose samples stand still scores almost as well as one whose samples move.
+// `truth`: the clips' Θ and masks (B items); `skeletons`: their B rows; `captions` (B, D) conditions
+// (caption_condition). One sample per clip, as long as its real frames. Put the model in eval mode.
+tat::ReconstructionMetrics sampled_turning(MotionDenoiserImpl& model, const NoiseSchedule& schedule,
+                                           const tat::BatchTensors& truth, const SkeletonInputs& skeletons,
+                                           const at::Tensor& captions, const DiffusionSamplingOptions& options);
 
 // (T, J, C) standard normal noise of the stream `seed`.
 at::Tensor seeded_noise(uint64_t seed, int64_t frames, int64_t joints, const c10::Device& device);

@@ -21,7 +21,9 @@
 // per item, then over the batch. Caption dropout (for classifier-free
 // guidance) replaces an item's caption by the learnt null caption.
 // Validation: the same loss on the val clips (no augmentation or dropout),
-// at fixed timesteps and noise, so that it is comparable between checkpoints.
+// at fixed timesteps and noise, so that it is comparable between checkpoints;
+// and the joints' turning that whole samples of val clips keep
+// (sampled_turning), which the loss hardly sees.
 #pragma once
 
 #include "nec/diffusion/checkpoint.h"
@@ -35,6 +37,7 @@
 #include <torch/optim/adamw.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -46,6 +49,7 @@ class ConfigVisitor;
 }
 namespace nec::tat {
 class RememberedSkeletonEmbeddings;
+struct BatchTensors;
 }
 
 namespace nec::diffusion {
@@ -93,6 +97,12 @@ at::Tensor denoising_loss(const at::Tensor& predicted, const at::Tensor& target,
 at::Tensor velocity_loss(const at::Tensor& predicted, const at::Tensor& target, const at::Tensor& used,
                          int64_t global_items);
 
+// A batch's captions read for the text encoder, and the items (B) bool that read the null caption instead.
+struct DenoisingCaptions {
+  text::TextBatch text;
+  at::Tensor dropped;
+};
+
 // What a stage trains with besides its data: the frozen OwO encoder, the
 // piece model, the pose model (motion stage) and the word vectors the caption
 // and OwO encoders read (none when neither reads words).
@@ -137,7 +147,7 @@ class DiffusionTrainer {
   int64_t resume(const std::string& dir);
   // One optimizer step (1-based) on the next batch: {"loss", "lr"}.
   train::LossTerms step(int64_t step);
-  // {"val_loss"} on the val clips (nullopt without any).
+  // {"val_loss", "val_sampled_turning_kept"} on the val clips (nullopt without any).
   std::optional<train::LossTerms> validate();
   void save(const std::string& dir, int64_t step);
 
@@ -154,6 +164,10 @@ class DiffusionTrainer {
   // The loss of a batch, each item's draws from draw_seed and its place in the whole batch;
   // `validation`: no caption dropout.
   at::Tensor loss_of(const Batch& batch, bool validation, uint64_t draw_seed);
+  // The batch's skeletons (x: its tensors on the device) with their frozen OwO embeddings.
+  SkeletonInputs skeleton_inputs(const Batch& batch, const tat::BatchTensors& x);
+  // The batch's captions read; item i reads the null caption when it has none or drop(i).
+  DenoisingCaptions read_captions(const Batch& batch, const std::function<bool(int64_t)>& drop);
   std::vector<at::Tensor> trained_parameters();
   void train_mode();
 
