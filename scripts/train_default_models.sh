@@ -7,8 +7,7 @@
 #   scripts/train_default_models.sh [WORK_DIR] [OUT_DIR]     # defaults: out/default-models, models/default
 # On 2 cores (2026-12-06, 3,661 clips): the data step 30 s, OwO 1.5 min, the tokenizer and the evaluator side by
 # side (the tokenizer's 2,000 steps at ~0.93 steps/s: ~36 min; alone on two threads 22 min) and 57 min, the GPT
-# (2,400 steps) 7 min; the diffusion model's two stages about 40 min more alone (estimated from their speed
-# beside other work). Writes
+# (2,400 steps) 7 min; the diffusion model's two stages 15 and 28 min (2026-12-06, beside lighter work). Writes
 # OUT_DIR/{gpt,evaluator,diffusion} (the GPT holds its tokenizer in gpt/tat, which holds its OwO encoder;
 # the diffusion model holds a copy of that encoder) without their training state; OUT_DIR/README.md
 # (kept) says how its numbers were measured. Run again after a stop, it goes on where it stopped (finished

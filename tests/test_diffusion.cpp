@@ -342,7 +342,7 @@ TEST(DiffusionLearning, ATinyDenoiserLearnsWhichMotionEachCaptionMeans) {
   diffusion::DiffusionSamplingOptions options;
   options.steps = 20;
   options.guidance = 2.0;
-  const auto turning_kept = [&] {
+  const auto sample_and_measure = [&] {
     model->eval();
     at::Tensor conditions;
     {
@@ -350,11 +350,12 @@ TEST(DiffusionLearning, ATinyDenoiserLearnsWhichMotionEachCaptionMeans) {
       conditions = model->caption_condition(piece_batch({{2}, {3}}), {});
     }
     return diffusion::sampled_turning(*model, schedule, truth, skeletons.select(torch::zeros({2}, torch::kInt64)),
-                                      conditions, options)
-        .pose_turn_kept();
+                                      conditions, options);
   };
-  // Untrained, the output layer is zero: every sample is the data's mean, joint 1 at rest.
-  EXPECT_LT(turning_kept(), 0.05);
+  // Untrained, the output layer is zero: every sample is the data's mean, joint 1 at rest and still.
+  const diffusion::SampledTurning untrained = sample_and_measure();
+  EXPECT_LT(untrained.pose_kept(), 0.05);
+  EXPECT_LT(untrained.speed_kept(), 0.05);
   const at::Tensor x0 = model->standardize(torch::stack({a, b, a, b, a, b, a, b}));
   const at::Tensor used = diffusion::channel_mask(skeletons.joint_mask).unsqueeze(1).expand({8, 8, 5, kC});
   const text::TextBatch captions = piece_batch({{2}, {3}, {2}, {3}, {2}, {3}, {2}, {3}});
@@ -375,9 +376,11 @@ TEST(DiffusionLearning, ATinyDenoiserLearnsWhichMotionEachCaptionMeans) {
   }
   EXPECT_LT(last, 0.5 * first);
   // Trained, the samples swing about as far as the real motions do.
-  const double kept = turning_kept();
-  EXPECT_GT(kept, 0.6);
-  EXPECT_LT(kept, 2.0);  // guidance 2 swings a little wider than the data (1.27 seen)
+  const diffusion::SampledTurning trained = sample_and_measure();
+  EXPECT_GT(trained.pose_kept(), 0.6);
+  EXPECT_LT(trained.pose_kept(), 2.0);  // guidance 2 swings a little wider than the data (1.27 seen)
+  EXPECT_GT(trained.speed_kept(), 0.6);
+  EXPECT_LT(trained.speed_kept(), 2.0);
   at::Tensor conditions;
   {
     torch::NoGradGuard no_grad;

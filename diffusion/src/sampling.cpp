@@ -3,6 +3,7 @@
 
 #include "nec/diffusion/windows.h"
 #include "nec/tat/batch_tensors.h"
+#include "nec/tat/fk.h"
 #include "nec/tat/model_space.h"
 
 #include <ATen/CPUGeneratorImpl.h>
@@ -11,6 +12,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace nec::diffusion {
 namespace {
@@ -111,22 +113,46 @@ std::vector<at::Tensor> sample_motions(MotionDenoiserImpl& model, const NoiseSch
   return out;
 }
 
-tat::ReconstructionMetrics sampled_turning(MotionDenoiserImpl& model, const NoiseSchedule& schedule,
-                                           const tat::BatchTensors& truth, const SkeletonInputs& skeletons,
-                                           const at::Tensor& captions, const DiffusionSamplingOptions& options) {
-  tat::ReconstructionMetrics metrics;
+void SampledTurning::add(const SampledTurning& other) {
+  sampled_pose += other.sampled_pose;
+  real_pose += other.real_pose;
+  sampled_speed += other.sampled_speed;
+  real_speed += other.real_speed;
+}
+
+namespace {
+
+// Σ degrees the non-root joints of Θ (1, T, J, 9) turn away from the rest pose, and from frame to frame.
+std::pair<double, double> joint_turning(const at::Tensor& theta, const at::Tensor& joint_mask) {
+  const at::Tensor r = tat::rot6d_to_matrix(theta.slice(-1, 3, 9).to(torch::kFloat64)).slice(2, 1);  // (1, T, J-1, 3, 3)
+  const at::Tensor joints = joint_mask.slice(1, 1).to(torch::kFloat64).unsqueeze(1);                 // (1, 1, J-1)
+  const auto degrees = [](const at::Tensor& traces) { return ((traces - 1.0) / 2.0).clamp(-1.0, 1.0).acos() * (180.0 / M_PI); };
+  const int64_t frames = r.size(1);
+  // The rest pose is the identity: a rotation's trace gives its angle; tr(R_tᵀ R_t+1) the turn between frames.
+  const at::Tensor pose = degrees(r.diagonal(0, -2, -1).sum(-1));
+  const at::Tensor speed = degrees((r.narrow(1, 0, frames - 1) * r.narrow(1, 1, frames - 1)).sum({-1, -2}));
+  return {(pose * joints).sum().item<double>(), (speed * joints).sum().item<double>()};
+}
+
+}  // namespace
+
+SampledTurning sampled_turning(MotionDenoiserImpl& model, const NoiseSchedule& schedule, const tat::BatchTensors& truth,
+                               const SkeletonInputs& skeletons, const at::Tensor& captions,
+                               const DiffusionSamplingOptions& options) {
+  SampledTurning turning;
   for (int64_t i = 0; i < truth.features.size(0); ++i) {
     const tat::BatchTensors clip = truth.items(i, 1);
     const int64_t frames = clip.frame_mask.sum().item<int64_t>();
-    if (frames == 0) continue;
+    if (frames < 2) continue;
     const at::Tensor row = torch::full({1}, i, torch::kInt64);
     const at::Tensor motion =
         sample_motions(model, schedule, skeletons.select(row), captions.narrow(0, i, 1), {frames}, 1, options).front();
     const at::Tensor theta = tat::model_space_to_features(motion.unsqueeze(0), torch::zeros({1}, motion.options()));
-    metrics.add(theta, clip.features.narrow(1, 0, frames), clip.parents, clip.offsets, clip.joint_mask,
-                clip.frame_mask.narrow(1, 0, frames));
+    const auto [sampled_pose, sampled_speed] = joint_turning(theta, clip.joint_mask);
+    const auto [real_pose, real_speed] = joint_turning(clip.features.narrow(1, 0, frames), clip.joint_mask);
+    turning.add({sampled_pose, real_pose, sampled_speed, real_speed});
   }
-  return metrics;
+  return turning;
 }
 
 }  // namespace nec::diffusion

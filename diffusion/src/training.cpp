@@ -10,7 +10,6 @@
 #include "nec/owo/checkpoint.h"
 #include "nec/tat/batch_tensors.h"
 #include "nec/tat/inference.h"
-#include "nec/tat/metrics.h"
 #include "nec/tat/model_space.h"
 #include "nec/train/checkpoint_io.h"
 #include "nec/train/config_fields.h"
@@ -280,7 +279,7 @@ std::optional<train::LossTerms> DiffusionTrainer::validate() {
     total += loss_of(validation_->batch(0, index), true, mix64(kValidationSeed ^ static_cast<uint64_t>(index))).item<double>();
   }
   // Clips spread over the val split sampled whole from their captions: do the bodies move as the real ones do?
-  tat::ReconstructionMetrics turning;
+  SampledTurning turning;
   DiffusionSamplingOptions options;
   options.steps = kSampledSteps;
   options.seed = kValidationSeed;
@@ -294,7 +293,9 @@ std::optional<train::LossTerms> DiffusionTrainer::validate() {
                                 model_->caption_condition(captions.text, captions.dropped).narrow(0, 0, 1), options));
   }
   train_mode();
-  return train::LossTerms{{"val_loss", total / std::max(1, batches)}, {"val_sampled_turning_kept", turning.pose_turn_kept()}};
+  return train::LossTerms{{"val_loss", total / std::max(1, batches)},
+                          {"val_sampled_pose_kept", turning.pose_kept()},
+                          {"val_sampled_speed_kept", turning.speed_kept()}};
 }
 
 train::TrainingSchedule DiffusionTrainer::loop_schedule() const {

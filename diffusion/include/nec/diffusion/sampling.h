@@ -15,7 +15,6 @@
 
 #include "nec/diffusion/denoiser.h"
 #include "nec/diffusion/noise_schedule.h"
-#include "nec/tat/metrics.h"
 
 #include <ATen/core/Tensor.h>
 
@@ -47,15 +46,26 @@ std::vector<at::Tensor> sample_motions(MotionDenoiserImpl& model, const NoiseSch
                                        const std::vector<int64_t>& segment_frames, int samples,
                                        const DiffusionSamplingOptions& options);
 
-// The joints' turning (away from the rest pose) of motions sampled on real clips' skeletons from their
-// captions, beside the clips' own: pose_turn_kept() of the result is Σ sampled / Σ real (0: bodies that stand
-// still, 1: as much as the real ones). The x0 loss hardly tells: at most noise levels its best answer is near
-// the mean pose, and a model whose samples stand still scores almost as well as one whose samples move.
+// How the joints of motions sampled on real clips' skeletons from their captions turn, beside the real
+// clips' own: away from the rest pose (the pose) and from one frame to the next (the speed), in degrees
+// summed over the non-root joints of the real frames. The x0 loss hardly tells: at most noise levels its
+// best answer is near the mean pose, and a model whose samples stand still scores almost as well as one
+// whose samples move. A body held still in some pose keeps its pose's turning but none of the speed.
+struct SampledTurning {
+  double sampled_pose = 0, real_pose = 0;
+  double sampled_speed = 0, real_speed = 0;
+
+  void add(const SampledTurning& other);
+  // Sampled / real (0: bodies at rest, or standing still; 1: as much as the real ones; jitter adds speed).
+  double pose_kept() const { return real_pose > 0 ? sampled_pose / real_pose : 0.0; }
+  double speed_kept() const { return real_speed > 0 ? sampled_speed / real_speed : 0.0; }
+};
+
 // `truth`: the clips' Θ and masks (B items); `skeletons`: their B rows; `captions` (B, D) conditions
 // (caption_condition). One sample per clip, as long as its real frames. Put the model in eval mode.
-tat::ReconstructionMetrics sampled_turning(MotionDenoiserImpl& model, const NoiseSchedule& schedule,
-                                           const tat::BatchTensors& truth, const SkeletonInputs& skeletons,
-                                           const at::Tensor& captions, const DiffusionSamplingOptions& options);
+SampledTurning sampled_turning(MotionDenoiserImpl& model, const NoiseSchedule& schedule, const tat::BatchTensors& truth,
+                               const SkeletonInputs& skeletons, const at::Tensor& captions,
+                               const DiffusionSamplingOptions& options);
 
 // (T, J, C) standard normal noise of the stream `seed`.
 at::Tensor seeded_noise(uint64_t seed, int64_t frames, int64_t joints, const c10::Device& device);

@@ -22,8 +22,8 @@
 // guidance) replaces an item's caption by the learnt null caption.
 // Validation: the same loss on the val clips (no augmentation or dropout),
 // at fixed timesteps and noise, so that it is comparable between checkpoints;
-// and the joints' turning that whole samples of val clips keep
-// (sampled_turning), which the loss hardly sees.
+// and how much of the joints' turning (pose and speed) whole samples of val
+// clips keep (sampled_turning), which the loss hardly sees.
 #pragma once
 
 #include "nec/diffusion/checkpoint.h"
@@ -147,7 +147,7 @@ class DiffusionTrainer {
   int64_t resume(const std::string& dir);
   // One optimizer step (1-based) on the next batch: {"loss", "lr"}.
   train::LossTerms step(int64_t step);
-  // {"val_loss", "val_sampled_turning_kept"} on the val clips (nullopt without any).
+  // {"val_loss", "val_sampled_pose_kept", "val_sampled_speed_kept"} on the val clips (nullopt without any).
   std::optional<train::LossTerms> validate();
   void save(const std::string& dir, int64_t step);
 
