@@ -4,6 +4,7 @@
 #include "nec/diffusion/windows.h"
 #include "nec/tat/batch_tensors.h"
 #include "nec/tat/fk.h"
+#include "nec/tat/metrics.h"
 #include "nec/tat/model_space.h"
 
 #include <ATen/CPUGeneratorImpl.h>
@@ -124,14 +125,9 @@ namespace {
 
 // Σ degrees the non-root joints of Θ (1, T, J, 9) turn away from the rest pose, and from frame to frame.
 std::pair<double, double> joint_turning(const at::Tensor& theta, const at::Tensor& joint_mask) {
-  const at::Tensor r = tat::rot6d_to_matrix(theta.slice(-1, 3, 9).to(torch::kFloat64)).slice(2, 1);  // (1, T, J-1, 3, 3)
-  const at::Tensor joints = joint_mask.slice(1, 1).to(torch::kFloat64).unsqueeze(1);                 // (1, 1, J-1)
-  const auto degrees = [](const at::Tensor& traces) { return ((traces - 1.0) / 2.0).clamp(-1.0, 1.0).acos() * (180.0 / M_PI); };
-  const int64_t frames = r.size(1);
-  // The rest pose is the identity: a rotation's trace gives its angle; tr(R_tᵀ R_t+1) the turn between frames.
-  const at::Tensor pose = degrees(r.diagonal(0, -2, -1).sum(-1));
-  const at::Tensor speed = degrees((r.narrow(1, 0, frames - 1) * r.narrow(1, 1, frames - 1)).sum({-1, -2}));
-  return {(pose * joints).sum().item<double>(), (speed * joints).sum().item<double>()};
+  const at::Tensor r = tat::rot6d_to_matrix(theta.slice(-1, 3, 9).to(torch::kFloat64));  // (1, T, J, 3, 3)
+  const at::Tensor joints = joint_mask.slice(1, 1).to(torch::kFloat64).unsqueeze(1);    // (1, 1, J-1)
+  return {(tat::pose_turn_degrees(r) * joints).sum().item<double>(), (tat::frame_turn_degrees(r) * joints).sum().item<double>()};
 }
 
 }  // namespace

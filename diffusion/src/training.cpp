@@ -37,7 +37,7 @@ constexpr int kValidationBatch = 16;
 constexpr int kValidationBatches = 4;      // the val loss reads at most this many batches
 constexpr size_t kStatisticsClips = 512;   // data statistics from at most this many train clips
 constexpr uint64_t kValidationSeed = 0x76616c6964ull;
-constexpr int64_t kSampledClips = 6;        // validation samples clips spread over the val split whole ...
+constexpr size_t kSampledClips = 6;         // validation samples clips spread over the val split whole ...
 constexpr int64_t kSampledSteps = 20;       // ... with this many DDIM steps (guidance as generation's default)
 // A dropped caption still goes through the text encoder (then is replaced): any valid caption does.
 constexpr const char* kPlaceholderCaption = "motion";
@@ -135,6 +135,12 @@ DiffusionTrainer::DiffusionTrainer(const DiffusionTrainConfig& config, Diffusion
     options.shuffle = false;
     options.seed = kValidationSeed;
     validation_ = std::make_unique<BatchLoader>(cache_, Split::Val, options);
+    const std::vector<int> val_clips = validation_->epoch_order(0);
+    std::vector<int> spread;
+    const size_t count = std::min<size_t>(kSampledClips, val_clips.size());
+    for (size_t k = 0; k < count; ++k) spread.push_back(val_clips[k * val_clips.size() / count]);
+    options.batch_size = 1;
+    sampled_clips_ = std::make_unique<BatchLoader>(cache_, std::move(spread), options);
   }
 
   torch::manual_seed(config_.seed);
@@ -283,14 +289,12 @@ std::optional<train::LossTerms> DiffusionTrainer::validate() {
   DiffusionSamplingOptions options;
   options.steps = kSampledSteps;
   options.seed = kValidationSeed;
-  const int64_t batches_in_split = validation_->batches_per_epoch();
-  for (int64_t k = 0; k < std::min(kSampledClips, batches_in_split); ++k) {
-    const Batch batch = validation_->batch(0, static_cast<int>(k * batches_in_split / kSampledClips));
-    const tat::BatchTensors x = tat::to_tensors(batch).to(device_);
-    const DenoisingCaptions captions = read_captions(batch, [](int64_t) { return false; });
-    const at::Tensor first = torch::zeros({1}, torch::kInt64);
-    turning.add(sampled_turning(*model_, schedule_, x.items(0, 1), skeleton_inputs(batch, x).select(first),
-                                model_->caption_condition(captions.text, captions.dropped).narrow(0, 0, 1), options));
+  for (int index = 0; index < sampled_clips_->batches_per_epoch(); ++index) {
+    const Batch clip = sampled_clips_->batch(0, index);
+    const tat::BatchTensors x = tat::to_tensors(clip).to(device_);
+    const DenoisingCaptions captions = read_captions(clip, [](int64_t) { return false; });
+    turning.add(sampled_turning(*model_, schedule_, x, skeleton_inputs(clip, x),
+                                model_->caption_condition(captions.text, captions.dropped), options));
   }
   train_mode();
   return train::LossTerms{{"val_loss", total / std::max(1, batches)},

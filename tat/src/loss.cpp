@@ -8,6 +8,7 @@
 
 #include <torch/torch.h>
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -91,17 +92,15 @@ ReconstructionLoss reconstruction_loss(const at::Tensor& prediction, const Batch
 
   // Before positions_from_step the positions' terms weigh 0: they are still logged, but FK's backward is skipped.
   const bool positions_count = weights.position > 0.0 || weights.velocity > 0.0;
-  at::Tensor predicted_positions, target_positions;
+  at::Tensor target_positions;
   {
     torch::NoGradGuard no_grad;
     target_positions = features_to_positions(target.features, target.parents, target.offsets).positions;
-    if (!positions_count) {
-      predicted_positions = features_to_positions(prediction, target.parents, target.offsets).positions;
-    }
   }
-  if (positions_count) {
-    predicted_positions = features_to_positions(prediction, target.parents, target.offsets).positions;
-  }
+  std::optional<torch::NoGradGuard> logged_only;
+  if (!positions_count) logged_only.emplace();
+  const at::Tensor predicted_positions = features_to_positions(prediction, target.parents, target.offsets).positions;
+  logged_only.reset();
   const at::Tensor position = masked_l1(predicted_positions, target_positions, real);
   at::Tensor velocity = torch::zeros({}, prediction.options());
   if (t > 1) {

@@ -11,6 +11,21 @@
 
 namespace nec::tat {
 
+at::Tensor degrees_from_trace(const at::Tensor& traces) {
+  return ((traces - 1.0) / 2.0).clamp(-1.0, 1.0).acos() * (180.0 / M_PI);
+}
+
+at::Tensor pose_turn_degrees(const at::Tensor& rotations) {
+  return degrees_from_trace(rotations.slice(2, 1).diagonal(0, -2, -1).sum(-1));
+}
+
+at::Tensor frame_turn_degrees(const at::Tensor& rotations) {
+  const at::Tensor joints = rotations.slice(2, 1);
+  const int64_t frames = joints.size(1);
+  // tr(R_tᵀ R_t+1): the angle of the turn between frames.
+  return degrees_from_trace((joints.narrow(1, 0, frames - 1) * joints.narrow(1, 1, frames - 1)).sum({-1, -2}));
+}
+
 void ReconstructionMetrics::add(const at::Tensor& prediction, const at::Tensor& features, const at::Tensor& parents,
                                 const at::Tensor& offsets, const at::Tensor& joint_mask, const at::Tensor& frame_mask,
                                 double scale) {
@@ -27,12 +42,10 @@ void ReconstructionMetrics::add(const at::Tensor& prediction, const at::Tensor& 
   const at::Tensor r_pred = rot6d_to_matrix(prediction.slice(-1, 3, 9).to(torch::kFloat64));
   const at::Tensor r_true = rot6d_to_matrix(features.slice(-1, 3, 9).to(torch::kFloat64));
   const at::Tensor trace = (r_pred * r_true).sum({-1, -2});  // tr(R̂ᵀ R)
-  const auto degrees = [](const at::Tensor& traces) { return ((traces - 1.0) / 2.0).clamp(-1.0, 1.0).acos() * (180.0 / M_PI); };
-  const at::Tensor angle = degrees(trace);
-  // The rest pose is the identity: a rotation's trace alone gives its angle.
+  const at::Tensor angle = degrees_from_trace(trace);
   const at::Tensor joints = mask.slice(2, 1);
-  predicted_turn_sum += (degrees(r_pred.slice(2, 1).diagonal(0, -2, -1).sum(-1)) * joints).sum().item<double>();
-  true_turn_sum += (degrees(r_true.slice(2, 1).diagonal(0, -2, -1).sum(-1)) * joints).sum().item<double>();
+  predicted_turn_sum += (pose_turn_degrees(r_pred) * joints).sum().item<double>();
+  true_turn_sum += (pose_turn_degrees(r_true) * joints).sum().item<double>();
   position_error_sum += scale * (world * mask).sum().item<double>();
   local_position_error_sum += scale * (local * mask).sum().item<double>();
   angle_error_sum += (angle * mask).sum().item<double>();

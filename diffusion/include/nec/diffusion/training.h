@@ -184,6 +184,7 @@ class DiffusionTrainer {
   NoiseSchedule schedule_;
   MotionDenoiser model_{nullptr};
   std::unique_ptr<BatchLoader> train_, validation_;
+  std::unique_ptr<BatchLoader> sampled_clips_;  // one val clip a batch, spread over the split: sampled whole
   std::unique_ptr<torch::optim::AdamW> optimizer_;
   train::LearningRateSchedule lr_schedule_;
 };

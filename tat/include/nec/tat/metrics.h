@@ -19,6 +19,13 @@
 
 namespace nec::tat {
 
+// The angle (degrees) of rotations from their traces: acos((tr R - 1) / 2), any shape.
+at::Tensor degrees_from_trace(const at::Tensor& traces);
+// rotations (B, T, J, 3, 3), local for joints (the rest pose is the identity), the root first. The degrees each
+// joint other than the root is turned away from the rest pose, (B, T, J-1), and turns from frame to frame, (B, T-1, J-1).
+at::Tensor pose_turn_degrees(const at::Tensor& rotations);
+at::Tensor frame_turn_degrees(const at::Tensor& rotations);
+
 struct ReconstructionMetrics {
   double position_error_sum = 0;       // Σ |p̂ - p| over joints × frames (world positions, root trajectory included)
   double local_position_error_sum = 0; // Σ |(p̂ - p̂_root) - (p - p_root)| (no root translation)
