@@ -20,6 +20,13 @@ namespace {
 
 constexpr int64_t kYawRateChannel = 9;
 
+// Σ degrees the non-root joints of Θ (1, T, J, 9) turn away from the rest pose, and from frame to frame.
+std::pair<double, double> joint_turning(const at::Tensor& theta, const at::Tensor& joint_mask) {
+  const at::Tensor r = tat::rot6d_to_matrix(theta.slice(-1, 3, 9).to(torch::kFloat64));  // (1, T, J, 3, 3)
+  const at::Tensor joints = joint_mask.slice(1, 1).to(torch::kFloat64).unsqueeze(1);    // (1, 1, J-1)
+  return {(tat::pose_turn_degrees(r) * joints).sum().item<double>(), (tat::frame_turn_degrees(r) * joints).sum().item<double>()};
+}
+
 }  // namespace
 
 void DiffusionSamplingOptions::validate() const {
@@ -120,17 +127,6 @@ void SampledTurning::add(const SampledTurning& other) {
   sampled_speed += other.sampled_speed;
   real_speed += other.real_speed;
 }
-
-namespace {
-
-// Σ degrees the non-root joints of Θ (1, T, J, 9) turn away from the rest pose, and from frame to frame.
-std::pair<double, double> joint_turning(const at::Tensor& theta, const at::Tensor& joint_mask) {
-  const at::Tensor r = tat::rot6d_to_matrix(theta.slice(-1, 3, 9).to(torch::kFloat64));  // (1, T, J, 3, 3)
-  const at::Tensor joints = joint_mask.slice(1, 1).to(torch::kFloat64).unsqueeze(1);    // (1, 1, J-1)
-  return {(tat::pose_turn_degrees(r) * joints).sum().item<double>(), (tat::frame_turn_degrees(r) * joints).sum().item<double>()};
-}
-
-}  // namespace
 
 SampledTurning sampled_turning(MotionDenoiserImpl& model, const NoiseSchedule& schedule, const tat::BatchTensors& truth,
                                const SkeletonInputs& skeletons, const at::Tensor& captions,
