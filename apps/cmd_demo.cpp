@@ -10,6 +10,7 @@
 #include "nec/evaluator/retrieval.h"
 #include "nec/evaluator/retrieval_index.h"
 #include "nec/gpt/generation.h"
+#include "nec/owo/stance.h"
 #include "nec/corpus/augment.h"
 #include "nec/motion/bvh.h"
 #include "nec/corpus/corpus.h"
@@ -79,6 +80,11 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
   gpt::GeneratorSession session = gpt::open_generator(gpt_dir, "");
   const double fps = session.fps();
   std::vector<std::pair<std::string, std::string>> pages;
+  // Skeletons that receive motion take their creature's stance, as in nec generate and nec transfer.
+  const std::string stance_dir = default_model_dir("stance");
+  std::optional<owo::NetworkStance> network_stance;
+  if (!stance_dir.empty()) network_stance.emplace(owo::NetworkStance::open(stance_dir, ""));
+  const StancePredictor* stance = network_stance ? &*network_stance : nullptr;
 
   // Transfers: the clip of each plan onto the skeleton of the next plan.
   std::vector<viewer::ViewClip> transfers;
@@ -90,7 +96,7 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
     tat::DecodeCorrections corrections;
     corrections.source = &source.clip;
     tat::decode_onto(session.tokenizer, tat::encode_file(session.tokenizer, source, source_path), target_path, UpAxis::Auto,
-                     corrections, result);
+                     stance, corrections, result);
     transfers.push_back(viewer::load_view_clip(source_path));
     transfers.back().captions = {caption};
     transfers.push_back(viewer::load_view_clip(result));
@@ -111,15 +117,16 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
   int diffused = 0;
   for (size_t i = 0; i < clips_by_plan.size() && i < 5; ++i) {
     const auto& [skeleton_path, caption] = clips_by_plan[i];
-    const PreparedClip target = tat::prepare_target(skeleton_path, fps, UpAxis::Auto);
+    const PreparedClip target = tat::prepare_target(skeleton_path, fps, UpAxis::Auto, stance);
     const int64_t steps = static_cast<int64_t>(4.0 * fps) / session.downsampling();
     const at::Tensor codes = gpt::generate_codes(session, target, {{caption, steps}}, 1, sampling).front();
     const std::string result = (models / fmt::format("generated_{}.bvh", i + 1)).string();
-    tat::decode_onto(session.tokenizer, session.token_file(codes, caption), skeleton_path, UpAxis::Auto, {}, result);
+    tat::decode_onto(session.tokenizer, session.token_file(codes, caption), target, skeleton_path, {}, result);
     generated.push_back(viewer::load_view_clip(result));
     generated.back().captions = {caption};
     if (diffusion_session && i < 3) {
-      const PreparedClip on_skeleton = tat::prepare_target(skeleton_path, diffusion_session->fps(), UpAxis::Auto);
+      const PreparedClip on_skeleton =
+          tat::prepare_target(skeleton_path, diffusion_session->fps(), UpAxis::Auto, stance);
       diffusion::DiffusionSamplingOptions options;  // 50 steps, guidance 2.5
       options.seed = i;
       const Features motion = diffusion::generate_motions(*diffusion_session, on_skeleton,
@@ -138,12 +145,12 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
   const auto biped = std::find_if(clips_by_plan.begin(), clips_by_plan.end(),
                                   [](const auto& clip) { return evaluator::body_plan_of_file(clip.first, "") == "biped"; });
   if (biped != clips_by_plan.end()) {
-    const PreparedClip target = tat::prepare_target(biped->first, fps, UpAxis::Auto);
+    const PreparedClip target = tat::prepare_target(biped->first, fps, UpAxis::Auto, stance);
     const int64_t steps = static_cast<int64_t>(3.0 * fps) / session.downsampling();
     const std::vector<gpt::Segment> segments{{"a person walks forward", steps}, {"a person turns to the left", steps}};
     const at::Tensor codes = gpt::generate_codes(session, target, segments, 1, sampling).front();
     const std::string result = (models / "generated_two_captions.bvh").string();
-    tat::decode_onto(session.tokenizer, session.token_file(codes, segments[0].caption), biped->first, UpAxis::Auto, {},
+    tat::decode_onto(session.tokenizer, session.token_file(codes, segments[0].caption), target, biped->first, {},
                      result);
     generated.push_back(viewer::load_view_clip(result));
     generated.back().captions = {"0-3 s: " + segments[0].caption, "3-6 s: " + segments[1].caption};

@@ -110,6 +110,7 @@ int run_generate(int argc, char** argv) {
   cli.flag("--force", "overwrite output files that exist");
   cli.option("--glove", "FILE", "", "imported word vectors (default: the ones `nec text import-glove` wrote)");
   cli.option("--threads", "N", "0", "torch threads; 0 = all cores");
+  declare_stance_options(cli);
   cli.example("nec generate \"a dragon flaps its wings and takes off\" --skeleton dragon.bvh --model runs/gpt -o out.bvh");
   cli.example("nec generate \"a dog walks forward\" \"then it sits down\" --skeleton dog.bvh --model runs/gpt -o dog.bvh --seconds 3,2");
   cli.example("nec generate \"a spider walks forward quickly\" --skeleton spider.bvh --model runs/diffusion -o spider.bvh --samples 4 --view spider.html");
@@ -185,6 +186,7 @@ int run_generate(int argc, char** argv) {
   std::vector<at::Tensor> codes;
   std::vector<Features> motions;
   std::optional<PreparedClip> target;
+  const std::unique_ptr<StancePredictor> stance = open_stance(cli, cli.value("--glove"));
   if (is_diffusion) {
     diffusion_session.emplace(diffusion::open_diffusion(model, cli.value("--glove")));
     fps = diffusion_session->fps();
@@ -192,7 +194,7 @@ int run_generate(int argc, char** argv) {
     if (diffusion_sampling.steps > noise_steps) {
       throw UsageError(fmt::format("--steps {} is more than the model's {} noise steps", diffusion_sampling.steps, noise_steps));
     }
-    target = tat::prepare_target(cli.value("--skeleton"), fps, up);
+    target = tat::prepare_target(cli.value("--skeleton"), fps, up, stance.get());
     const int64_t window = diffusion_session->model.model->config().max_frames;
     std::vector<diffusion::DiffusionSegment> segments;
     for (size_t i = 0; i < captions.size(); ++i) {
@@ -207,7 +209,7 @@ int run_generate(int argc, char** argv) {
   } else {
     gpt_session.emplace(gpt::open_generator(model, cli.value("--glove")));
     fps = gpt_session->fps();
-    target = tat::prepare_target(cli.value("--skeleton"), fps, up);
+    target = tat::prepare_target(cli.value("--skeleton"), fps, up, stance.get());
     std::vector<gpt::Segment> segments;
     for (size_t i = 0; i < captions.size(); ++i) {
       const int64_t steps = std::max<int64_t>(1, std::lround(seconds[i] * fps / gpt_session->downsampling()));

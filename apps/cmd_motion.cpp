@@ -8,6 +8,7 @@
 #include "nec/motion/frame_rate.h"
 #include "nec/motion/names.h"
 #include "nec/corpus/preprocess.h"
+#include "nec/corpus/stance.h"
 #include "nec/corpus/rest_pose.h"
 
 #include <fmt/format.h>
@@ -103,6 +104,16 @@ int run_info(int argc, char** argv) {
   if (rate.travel_per_frame > 0.0) {
     fmt::print("travel    {:.3g} body sizes per frame, {:.3g}/s (median over frames of the root's move)\n",
                rate.travel_per_frame, rate.travel_per_second);
+  }
+  PreprocessOptions as_read;  // every frame, one frame enough: the limbs of a rig without motion too
+  as_read.target_fps = 0.0;
+  as_read.min_frames = 1;
+  const PreparedClip prepared = preprocess(clip, path, as_read);
+  const LimbAngles limbs = prepared.report.accepted() ? measure_limbs(prepared.clip, prepared.canonical_names)
+                                                      : LimbAngles{};
+  if (limbs.found) {
+    fmt::print("limbs     upper arms {:.0f}° from hanging (median), thighs swing {:.0f}° (5th to 95th percentile)\n",
+               limbs.arms_from_hanging, limbs.thigh_swing);
   }
   std::map<std::string, int> layouts;
   for (const ChannelLayout& layout : s.channels) ++layouts[layout_text(layout)];

@@ -31,6 +31,9 @@ int run_prepare(int argc, char** argv) {
                           "its dataset", true, true);
   cli.option("-o", "CACHE", "", "output cache directory (replaced atomically)", true);
   cli.option("--fps", "FPS", "30", "corpus frame rate");
+  cli.option("--source-fps", "FPS", "0", "the takes' true frame rate, replacing what every file says (BVH Frame Time),\n"
+                                        "for files whose motion is implausible at their own rate (a warning says so);\n"
+                                        "0: each file's own");
   cli.option("--up", "AXIS", "auto", "up axis of the inputs: auto, y or z");
   cli.option("--val", "FRACTION", "0.05", "fraction of source files for validation");
   cli.option("--test", "FRACTION", "0.05", "fraction of source files for test");
@@ -59,6 +62,8 @@ int run_prepare(int argc, char** argv) {
   corpus.preprocess.target_fps = cli.number("--fps");
   if (corpus.preprocess.target_fps <= 0) throw UsageError("--fps must be > 0");
   corpus.preprocess.up = cli.up_axis("--up");
+  corpus.read.fps = cli.number("--source-fps");
+  if (corpus.read.fps < 0) throw UsageError("--source-fps must be >= 0");
   corpus.preprocess.fold_any_translation = cli.is_set("--fold-translations");
   corpus.kinematic_captions = !cli.is_set("--no-kinematic-captions");
   corpus.threads = cli.integer("--threads");

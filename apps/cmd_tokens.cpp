@@ -98,14 +98,16 @@ int run_decode(int argc, char** argv) {
   cli.option("--up", "AXIS", "auto", "up axis of the skeleton file: auto, y or z");
   declare_correction_options(cli);
   declare_model_options(cli);
+  declare_stance_options(cli);
   cli.example("nec decode walk.tokens.json --skeleton dragon.bvh --model runs/tat -o dragon_walk.bvh");
   if (!cli.parse(argc, argv)) return 0;
   check_clip_output(cli.value("-o"), cli.value("--skeleton"));
   const auto start = std::chrono::steady_clock::now();
   tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const tat::TokenFile tokens = tat::read_tokens(cli.positional_value("TOKENS.json"));
+  const std::unique_ptr<StancePredictor> stance = open_stance(cli, cli.value("--glove"));
   const tat::DecodeReport report = tat::decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"),
-                                                    corrections(cli, nullptr), cli.value("-o"));
+                                                    stance.get(), corrections(cli, nullptr), cli.value("-o"));
   fmt::print("wrote {}: {} frames on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
              cli.value("--skeleton"), decode_summary(report), seconds_since(start));
   return 0;
@@ -128,6 +130,7 @@ int run_transfer(int argc, char** argv) {
                            "while the source's step, put them down in the source's rhythm and bend the legs to reach)");
   declare_correction_options(cli);
   declare_model_options(cli);
+  declare_stance_options(cli);
   cli.example("nec transfer human_wave.bvh --to dragon.bvh --model runs/tat -o dragon_wave.bvh");
   cli.example("nec transfer walk.bvh --to /usr/share/assimp/models/X/Testwuson.X -o wuson_walk.glb");
   if (!cli.parse(argc, argv)) return 0;
@@ -137,9 +140,10 @@ int run_transfer(int argc, char** argv) {
   const std::string& path = cli.positional_value("SRC");
   const PreparedClip source = tat::prepare_for_model(path, session.model.info.fps, cli.up_axis("--up"));
   const tat::TokenFile tokens = tat::encode_file(session, source, path);
+  const std::unique_ptr<StancePredictor> stance = open_stance(cli, cli.value("--glove"));
   const tat::DecodeReport report =
-      tat::decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"), corrections(cli, &source.clip),
-                       cli.value("-o"));
+      tat::decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"), stance.get(),
+                       corrections(cli, &source.clip), cli.value("-o"));
   if (!cli.value("--tokens").empty()) tat::write_tokens(cli.value("--tokens"), tokens);
   fmt::print("wrote {}: {} frames of {} on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames, path,
              cli.value("--to"), decode_summary(report), seconds_since(start));

@@ -19,6 +19,8 @@ int run_train(int argc, char** argv);      // nec train MODEL ...: dispatches to
 int run_train_owo(int argc, char** argv);  // nec train owo
 int run_eval(int argc, char** argv);       // nec eval MODEL ...: dispatches to run_eval_<model>
 int run_eval_owo(int argc, char** argv);   // nec eval owo
+int run_train_stance(int argc, char** argv);  // nec train stance
+int run_eval_stance(int argc, char** argv);   // nec eval stance
 int run_encode(int argc, char** argv);
 int run_decode(int argc, char** argv);
 int run_transfer(int argc, char** argv);

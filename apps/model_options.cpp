@@ -3,6 +3,10 @@
 
 #include "torch_runtime.h"
 
+#include "nec/owo/stance.h"
+
+#include <fmt/format.h>
+
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -65,6 +69,29 @@ tat::TokenizerSession open_tokenizer(const TokenizerOptions& options) {
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("--window-overlap: ") + e.what());
   }
+}
+
+void declare_stance_options(CommandLine& cli) {
+  cli.option("--stance", "DIR", "", "stance network (`nec train stance`) that reads, from the skeleton file's first\n"
+                                    "frame, the stance its creature's motion turns around; default: the default\n"
+                                    "models' (models/default/stance)");
+  cli.flag("--rest-from-motion", "turn the motion around the mean pose of the skeleton file's own motion instead\n"
+                                 "(the old behaviour; the file's pose then shows in the result)");
+}
+
+std::unique_ptr<StancePredictor> open_stance(const CommandLine& cli, const std::string& glove) {
+  if (cli.is_set("--rest-from-motion")) {
+    if (!cli.value("--stance").empty()) throw UsageError("--stance and --rest-from-motion exclude each other");
+    return nullptr;
+  }
+  std::string dir = cli.value("--stance");
+  if (dir.empty()) dir = default_model_dir("stance");
+  if (dir.empty()) {
+    fmt::print(stderr, "note: no stance network (models/default/stance): the skeleton's rest is the mean pose of its "
+                       "motion\n");
+    return nullptr;
+  }
+  return std::make_unique<owo::NetworkStance>(owo::NetworkStance::open(dir, glove));
 }
 
 }  // namespace nec::app

@@ -7,6 +7,7 @@
 
 #include "nec/tat/session.h"
 
+#include <memory>
 #include <string>
 
 namespace nec::app {
@@ -36,5 +37,13 @@ TokenizerOptions tokenizer_options(const CommandLine& cli);
 // Sets torch threads and opens the tokenizer (tat::open_tokenizer_session); a
 // bad --window-overlap is a UsageError.
 tat::TokenizerSession open_tokenizer(const TokenizerOptions& options);
+
+// Declares --stance and --rest-from-motion: how a skeleton that receives motion gets the rest its motion turns
+// around (tat::prepare_target).
+void declare_stance_options(CommandLine& cli);
+// The stance network those options ask for (--stance, else the default models' models/default/stance), or null
+// with --rest-from-motion, or when there is no default one (a note on stderr says the mean pose is used).
+// `glove`: the word vectors, for a network that reads joint names. InputError for a damaged checkpoint.
+std::unique_ptr<StancePredictor> open_stance(const CommandLine& cli, const std::string& glove);
 
 }  // namespace nec::app

@@ -150,8 +150,8 @@ void BM_TextToBvh(benchmark::State& state) {
     const std::vector<at::Tensor> codes =
         nec::gpt::generate_codes(*session, target, {{"a person walks forward", 30}}, samples, sampling);
     for (size_t i = 0; i < codes.size(); ++i) {
-      nec::tat::decode_onto(session->tokenizer, session->token_file(codes[i], "a person walks forward"), biped_file(),
-                            nec::UpAxis::Auto, {}, out + "_" + std::to_string(i) + ".bvh");
+      nec::tat::decode_onto(session->tokenizer, session->token_file(codes[i], "a person walks forward"), target,
+                            biped_file(), {}, out + "_" + std::to_string(i) + ".bvh");
     }
   }
   for (int i = 0; i < samples; ++i) fs::remove(out + "_" + std::to_string(i) + ".bvh");

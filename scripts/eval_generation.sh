@@ -7,15 +7,19 @@
 # SPLIT: test (default) or val; SAMPLES per caption (default 1; 2 or more also give Multimodality);
 # CLIPS: at most this many clips of each dataset, evenly spaced in the manifest's order (default: all).
 # NEC_THREADS: threads of each `nec generate` (default 2).
-# NEC_REST_SKELETONS=1: generate onto a one-frame copy of each clip's file in its rest pose
-# (scripts/rest_pose_bvh.py), as a user's exported rig, instead of the clip itself, whose canonical rest pose is
-# the clip's own mean pose (a waving clip's raised arm, which the model is then handed).
+# NEC_TARGET: the skeleton each motion is generated onto, never one that hands the model the clip's own pose:
+#   rest (default): a one-frame copy of the clip's file in its rest pose (scripts/rest_pose_bvh.py), as a user
+#     exports a rig (a T-pose for the zoo and CMU), which takes its creature's stance (models/default/stance);
+#   apose: the same with the upper arms lowered 45 degrees (an A-pose; rigs without upper arms as in rest);
+#   file: the clip's own file, its stance read from its first frame;
+#   mean: the clip's own file turned around the mean pose of its motion (--rest-from-motion): the protocol before
+#     the stance network, which hands the model the clip's pose (a waving clip's raised arm).
 # NEC_CAPTIONS=TSV (lines: a clip's file name, a tab, a caption; `#` comments): generate from those captions
 # instead, for the listed clips only; each sidecar keeps the clip's own first caption, so the evaluator scores
 # a paraphrase's motion against the caption it rewrites (benchmarks/data/paraphrases.tsv).
 # Writes OUT_DIR/generated/<dataset>/<the source's folder>/*.bvh (+ caption sidecars; the zoo's folders
-# cNNN_<plan> give `nec eval t2m` the body plan), OUT_DIR/t2m.md and OUT_DIR/t2m.json (and OUT_DIR/rest/ with
-# NEC_REST_SKELETONS).
+# cNNN_<plan> give `nec eval t2m` the body plan), OUT_DIR/t2m.md and OUT_DIR/t2m.json, and OUT_DIR/rest/ (the
+# one-frame rigs).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ $# -lt 4 ]; then
@@ -25,6 +29,8 @@ fi
 model=$1 cache=$2 evaluator=$3 out=$4 split=${5:-test} samples=${6:-1} clips=${7:-0}
 nec=${NEC:-build/apps/nec}
 threads=${NEC_THREADS:-2}
+target=${NEC_TARGET:-rest}
+case $target in rest | apose | file | mean) ;; *) echo "NEC_TARGET must be rest, apose, file or mean" >&2; exit 2 ;; esac
 mkdir -p "$out/generated"
 started=$SECONDS
 # One line per clip: dataset, source file, seconds, the caption to generate from, the clip's first caption
@@ -63,14 +69,18 @@ while IFS=$'\t' read -r dataset source seconds caption own; do
   folder="$out/generated/$dataset/$(basename "$(dirname "$source")")"
   mkdir -p "$folder"
   name=$(printf %04d "$count")
-  skeleton=$source
-  if [ "${NEC_REST_SKELETONS:-0}" = 1 ]; then
-    mkdir -p "$out/rest"  # beside generated/, which `nec eval t2m` reads
-    skeleton="$out/rest/$name.bvh"
-    python3 scripts/rest_pose_bvh.py "$source" "$skeleton"
-  fi
+  skeleton=$source rest_option=()
+  case $target in
+    rest | apose)
+      mkdir -p "$out/rest"  # beside generated/, which `nec eval t2m` reads
+      skeleton="$out/rest/$name.bvh"
+      arms=()
+      [ "$target" = apose ] && arms=(--lower-arms 45)
+      python3 scripts/rest_pose_bvh.py "$source" "$skeleton" "${arms[@]}" ;;
+    mean) rest_option=(--rest-from-motion) ;;
+  esac
   "$nec" generate "$caption" --skeleton "$skeleton" --model "$model" --seconds "$seconds" --samples "$samples" \
-    --seed "$count" -o "$folder/$name.bvh" --force --threads "$threads" > /dev/null
+    --seed "$count" -o "$folder/$name.bvh" --force --threads "$threads" "${rest_option[@]}" > /dev/null
   if [ "$caption" != "$own" ]; then
     for sidecar in "$folder/$name".txt "$folder/$name"_*.txt; do
       [ -f "$sidecar" ] && printf '%s\n' "$own" > "$sidecar"

@@ -8,7 +8,7 @@
 # On 2 cores (2026-12-06, 3,661 clips): the data step 30 s, OwO 1.5 min, the tokenizer and the evaluator side by
 # side (the tokenizer's 2,000 steps at ~0.93 steps/s: ~36 min; alone on two threads 22 min) and 57 min, the GPT
 # (2,400 steps) 7 min; the diffusion model's two stages 15 and 28 min (2026-12-06, beside lighter work). Writes
-# OUT_DIR/{gpt,evaluator,diffusion} (the GPT holds its tokenizer in gpt/tat, which holds its OwO encoder;
+# OUT_DIR/{gpt,evaluator,diffusion,stance} (the GPT holds its tokenizer in gpt/tat, which holds its OwO encoder;
 # the diffusion model holds a copy of that encoder) without their training state; OUT_DIR/README.md
 # (kept) says how its numbers were measured. Run again after a stop, it goes on where it stopped (finished
 # stages are skipped, an interrupted training resumes); remove WORK_DIR to start over.
@@ -54,6 +54,14 @@ if [ ! -f "$work/data.done" ]; then
   touch "$work/data.done"
 fi
 
+# The stance network (a rig given without motion -> its creature's stance): every rig of the cache but the held-out
+# hexapods and two CMU subjects, kept out so that its error on people it never saw is measured.
+step "stance network"
+if [ ! -f "$work/stance.done" ]; then
+  "$nec" train stance --data "$work/cache" --out "$work/stance" --hold-out '*/bvh/13_*,*/bvh/14_*' --names --steps 2400 --batch 16 --threads 1
+  touch "$work/stance.done"
+fi
+
 step "skeleton encoder"
 train owo owo --config configs/owo_default.json --data "$work/cache" --threads 2
 
@@ -82,6 +90,7 @@ mkdir -p "$out.tmp"
 cp -r "$work/gpt" "$out.tmp/gpt"
 cp -r "$work/evaluator/best" "$out.tmp/evaluator"
 cp -r "$work/diffusion" "$out.tmp/diffusion"
+cp -r "$work/stance" "$out.tmp/stance"
 find "$out.tmp" \( -name training.json -o -name optimizer.pt \) -delete
 rm -rf "$out.tmp/evaluator/best"
 [ -f "$out/README.md" ] && cp "$out/README.md" "$out.tmp/README.md"

@@ -227,6 +227,48 @@ TEST_F(CliGpt, TheBaselineTokenizersCarryAGpt) {
   }
 }
 
+// The stance network's commands on the tiny zoo: nec train stance, nec eval stance (held-out spider against the
+// bind pose kept), and generation that takes the stance by default, keeps the file's mean pose when asked, and
+// refuses a stance that is not one.
+TEST_F(CliGpt, GeneratesAroundTheStanceOfTheSkeleton) {
+  const std::string stance = path("stance");
+  const CommandResult trained = run_nec("train stance --data " + shared("cache") + " --out " + stance +
+                                        " --steps 20 --batch 4 --frames 2 --threads 1");
+  ASSERT_EQ(trained.exit_code, 0) << trained.output;
+  EXPECT_TRUE(contains(trained.output, "step 20/20")) << trained.output;
+  const CommandResult scored = run_nec("eval stance --model " + stance + " --data " + shared("cache") + " --json " +
+                                       path("stance.json"));
+  ASSERT_EQ(scored.exit_code, 0) << scored.output;
+  EXPECT_TRUE(contains(scored.output, "zoo_held_out / file rest")) << scored.output;
+  EXPECT_TRUE(contains(scored.output, "the bind pose kept as the stance")) << scored.output;
+  const nlohmann::json scores = nlohmann::json::parse(read_file(path("stance.json")));
+  ASSERT_TRUE(scores.is_array() && !scores.empty());
+  EXPECT_GT(scores[0].at("bones").get<int>(), 0);
+
+  // A one-frame rig: the stance decides its rest, so asking for the mean pose of its one frame writes another
+  // motion from the same seed.
+  const Clip source = read_bvh(spider());
+  const std::string posed = path("stance_rig.bvh");
+  write_bvh(posed, source.skeleton, source.motion.slice(0, 1));
+  const std::string base = "\"a spider walks\" --skeleton " + posed + " --seconds 1 --seed 5 --stance " + stance;
+  const CommandResult stood = run_nec(generate(base + " -o " + path("stood.bvh")));
+  ASSERT_EQ(stood.exit_code, 0) << stood.output;
+  const CommandResult mean = run_nec(generate("\"a spider walks\" --skeleton " + posed +
+                                              " --seconds 1 --seed 5 --rest-from-motion -o " + path("mean.bvh")));
+  ASSERT_EQ(mean.exit_code, 0) << mean.output;
+  EXPECT_NE(read_file(path("stood.bvh")), read_file(path("mean.bvh")));
+  EXPECT_EQ(read_bvh(path("stood.bvh")).skeleton.names, source.skeleton.names);
+
+  const CommandResult both = run_nec(generate(base + " --rest-from-motion -o " + path("both.bvh")));
+  EXPECT_EQ(both.exit_code, 2) << both.output;
+  EXPECT_TRUE(contains(both.output, "exclude each other")) << both.output;
+  const CommandResult foreign = run_nec(generate("\"a spider walks\" --skeleton " + posed + " --stance " +
+                                                 shared("tat") + " -o " + path("foreign.bvh")));
+  EXPECT_EQ(foreign.exit_code, 1) << foreign.output;
+  EXPECT_TRUE(contains(foreign.output, "config.json")) << foreign.output;
+  EXPECT_FALSE(fs::exists(path("both.bvh")) || fs::exists(path("foreign.bvh")));
+}
+
 TEST_F(CliGpt, BadInputGetsOneLineAndNoOutput) {
   const std::string out = path("out.bvh");
   const auto expect_refused = [&](const std::string& arguments, const std::string& message) {

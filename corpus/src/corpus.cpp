@@ -113,7 +113,7 @@ FileOutput load_file(const CorpusFile& file, const CorpusOptions& options) {
   std::vector<std::string> captions;
   std::optional<TakeDescription> description;
   try {
-    takes = read_clips(file.path);
+    takes = read_clips(file.path, options.read);
     captions = captions_for(file.path, options.captions);
     if (const std::string text = take_description_for(file.path, options.captions); !text.empty()) {
       try {

@@ -1,10 +1,13 @@
-// Joint-frame conventions: re-expressing a rig, the mean-pose canonical rest, other authoring conventions.
+// Joint-frame conventions: re-expressing a rig, the mean-pose canonical rest, other authoring conventions, and
+// the stance taken from the skeleton alone (stance.h).
 #include "nec/corpus/rest_pose.h"
+#include "nec/corpus/stance.h"
 
 #include "nec/motion/kinematics.h"
 
 #include <Eigen/SVD>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -126,6 +129,95 @@ Clip reorient_joint_axes(const Clip& clip, JointAxes axes, SplitMix64& rng) {
     if (!bone[j].isZero()) frames[j] = Quat::FromTwoVectors(bone[j], Vec3::UnitX()).normalized();
   }
   return reexpress_joint_frames(clip, frames);
+}
+
+std::vector<Quat> pose_frames(const Clip& clip, int frame) {
+  if (frame < 0 || frame >= clip.motion.frame_count) {
+    throw std::invalid_argument("pose_frames: frame " + std::to_string(frame) + " of a clip of " +
+                                std::to_string(clip.motion.frame_count));
+  }
+  const Pose pose = forward_kinematics(clip.skeleton, clip.motion.slice(frame, frame + 1));
+  return pose.rotations;
+}
+
+std::vector<Vec3> unit_bones(const Skeleton& skeleton) {
+  std::vector<Vec3> out(skeleton.joint_count(), Vec3::Zero());
+  for (int j = 1; j < skeleton.joint_count(); ++j) {
+    const double length = skeleton.offsets[j].norm();
+    if (length > 1e-9) out[j] = skeleton.offsets[j] / length;
+  }
+  return out;
+}
+
+std::vector<Vec3> BindPoseStance::bone_directions(const Skeleton& bind, const std::vector<std::string>&) const {
+  return unit_bones(bind);
+}
+
+std::vector<Quat> stance_frames(const Skeleton& bind, const std::vector<Vec3>& directions) {
+  const int joints = bind.joint_count();
+  if (static_cast<int>(directions.size()) != joints) {
+    throw std::invalid_argument("stance_frames: " + std::to_string(directions.size()) + " directions for " +
+                                std::to_string(joints) + " joints");
+  }
+  const std::vector<Vec3> bones = unit_bones(bind);
+  const std::vector<std::vector<int>> children = bind.children_lists();
+  std::vector<Quat> out(joints, Quat::Identity());
+  for (const int j : bind.depth_first_order()) {
+    const Quat parent = j == 0 ? Quat::Identity() : out[bind.parents[j]];
+    Mat3 sum = Mat3::Zero();
+    Vec3 from = Vec3::Zero(), to = Vec3::Zero();
+    for (const int c : children[j]) {
+      const double length = directions[c].norm();
+      if (bones[c].isZero() || !(length > 1e-9)) continue;
+      sum += (directions[c] / length) * bones[c].transpose();
+      from += bones[c];
+      to += directions[c] / length;
+    }
+    // Children that span a plane fix the whole turn; one child (or a line of them) leaves the turn about the
+    // bone free, and the parent's rotation decides it: the chain swings without twisting.
+    const Eigen::JacobiSVD<Mat3> svd(sum);
+    const Eigen::Vector3d spread = svd.singularValues();
+    if (spread(0) < 1e-12) {
+      out[j] = parent;
+    } else if (spread(1) < 0.01 * spread(0)) {
+      out[j] = (Quat::FromTwoVectors(parent * from, to) * parent).normalized();
+    } else {
+      out[j] = nearest_rotation(sum);
+    }
+  }
+  return out;
+}
+
+PreparedClip take_stance(const PreparedClip& prepared, const StancePredictor& predictor) {
+  const int joints = prepared.clip.skeleton.joint_count();
+  if (static_cast<int>(prepared.normalization.rest_frames.size()) != joints) {
+    throw std::invalid_argument("take_stance: the clip has no canonical rest frames (prepared with --keep-rest?)");
+  }
+  PreparedClip out = prepared;
+  const std::vector<Quat> bind = pose_frames(prepared.clip, 0);
+  out.clip = reexpress_joint_frames(prepared.clip, bind);
+  const std::vector<Quat> stance =
+      stance_frames(out.clip.skeleton, predictor.bone_directions(out.clip.skeleton, prepared.canonical_names));
+  out.clip = reexpress_joint_frames(out.clip, stance);
+  // Re-expressing with A, then B, is re-expressing with B A.
+  for (int j = 0; j < joints; ++j) {
+    out.normalization.rest_frames[j] = (stance[j] * bind[j] * prepared.normalization.rest_frames[j]).normalized();
+  }
+  out.report.changes.push_back("rest: the stance predicted from the skeleton in its frame-0 pose");
+  return out;
+}
+
+std::vector<double> bone_direction_errors(const Skeleton& predicted, const Skeleton& truth) {
+  if (predicted.parents != truth.parents) {
+    throw std::invalid_argument("bone_direction_errors: the skeletons are not one tree");
+  }
+  const std::vector<Vec3> a = unit_bones(predicted), b = unit_bones(truth);
+  std::vector<double> out;
+  for (size_t j = 0; j < a.size(); ++j) {
+    if (a[j].isZero() || b[j].isZero()) continue;
+    out.push_back(std::acos(std::clamp(a[j].dot(b[j]), -1.0, 1.0)) * kDegreesPerRadian);
+  }
+  return out;
 }
 
 }  // namespace nec

@@ -103,9 +103,9 @@ FrameRateCheck check_frame_rate(const Clip& clip) {
   out.warning = fmt::format(
       "the file says {:.4g} frames per second, but then its joints turn {:.3g}°/s ({:.3g}° per frame; real motion: "
       "{:.0f}-{:.0f}°/s) and its root travels {:.3g} body sizes/s ({:.3g} per frame; travelling capture: {:.2g} or "
-      "more): its rate is more likely about {:.3g} fps (give the true rate with --source-fps)",
+      "more): its rate is more likely about {:.3g} fps, a Frame Time of {:.3g} s (give the true rate with --source-fps)",
       motion.fps, out.turn_per_second, out.turn_per_frame, kSlowestTurnPerSecond, kFastestTurnPerSecond,
-      out.travel_per_second, out.travel_per_frame, kSlowestTravelPerSecond, out.likely_fps);
+      out.travel_per_second, out.travel_per_frame, kSlowestTravelPerSecond, out.likely_fps, 1.0 / out.likely_fps);
   return out;
 }
 

@@ -57,7 +57,10 @@ PreparedClip prepare_at(const std::string& path, double fps, UpAxis up, int min_
 
 PreparedClip prepare_for_model(const std::string& path, double fps, UpAxis up) { return prepare_at(path, fps, up, 2); }
 
-PreparedClip prepare_target(const std::string& path, double fps, UpAxis up) { return prepare_at(path, fps, up, 1); }
+PreparedClip prepare_target(const std::string& path, double fps, UpAxis up, const StancePredictor* stance) {
+  const PreparedClip prepared = prepare_at(path, fps, up, 1);
+  return stance ? take_stance(prepared, *stance) : prepared;
+}
 
 double heading_degrees(const Normalization& n) {
   const Quat yaw = (up_part(n).conjugate() * n.rotation).normalized();
@@ -108,8 +111,9 @@ std::string animation_name(const TokenFile& tokens) {
 }  // namespace
 
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path,
-                         UpAxis up, const DecodeCorrections& corrections, const std::string& out_path) {
-  return decode_onto(session, tokens, prepare_target(target_path, session.model.info.fps, up), target_path,
+                         UpAxis up, const StancePredictor* stance, const DecodeCorrections& corrections,
+                         const std::string& out_path) {
+  return decode_onto(session, tokens, prepare_target(target_path, session.model.info.fps, up, stance), target_path,
                      corrections, out_path);
 }
 

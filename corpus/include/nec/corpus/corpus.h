@@ -18,6 +18,7 @@
 #include "nec/corpus/dataset.h"
 #include "nec/corpus/preprocess.h"
 #include "nec/corpus/segment.h"
+#include "nec/motion/clip_file.h"
 
 #include <string>
 #include <vector>
@@ -31,6 +32,7 @@ struct CorpusFile {
 
 struct CorpusOptions {
   PreprocessOptions preprocess;
+  ClipReadOptions read;               // read.fps > 0: every file's true frame rate, replacing what it says
   CaptionSources captions;
   SegmentOptions segment;
   bool kinematic_captions = true;     // cut uncaptioned takes into clips captioned from their kinematics

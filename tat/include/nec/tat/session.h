@@ -5,13 +5,14 @@
 //   TokenizerSession session = open_tokenizer_session("runs/tat", /*glove=*/"", /*overlap_frames=*/-1);
 //   const PreparedClip walk = prepare_for_model("walk.bvh", session.model.info.fps, UpAxis::Auto);
 //   const TokenFile tokens = encode_file(session, walk, "walk.bvh");
-//   decode_onto(session, tokens, "dragon.bvh", UpAxis::Auto, {&walk.clip}, "dragon_walk.bvh");
+//   decode_onto(session, tokens, "dragon.bvh", UpAxis::Auto, &stance, {&walk.clip}, "dragon_walk.bvh");
 #pragma once
 
 #include "nec/fitting/follow_ground.h"
 #include "nec/fitting/follow_heading.h"
 #include "nec/fitting/foot_lock.h"
 #include "nec/corpus/preprocess.h"
+#include "nec/corpus/stance.h"
 #include "nec/fitting/step_feet.h"
 #include "nec/tat/checkpoint.h"
 #include "nec/tat/inference.h"
@@ -44,9 +45,11 @@ TokenizerSession open_tokenizer_session(const std::string& model_dir, const std:
 
 // read_bvh + preprocess at the model's fps; InputError naming the file when it is rejected.
 PreparedClip prepare_for_model(const std::string& path, double fps, UpAxis up);
-// The same for a skeleton that receives motion (generate --skeleton, transfer --to): its own motion is not used,
-// so one frame (a rig exported in its rest pose) is enough.
-PreparedClip prepare_target(const std::string& path, double fps, UpAxis up);
+// The same for a skeleton that receives motion (generate --skeleton, transfer --to, decode --skeleton): its own
+// motion is not used, so one frame (a rig exported in its bind pose) is enough. With `stance`, the rest the
+// motion turns around is the stance `stance` reads from the file's frame 0 (corpus/stance.h), whatever pose the
+// rig was given in; without (null), the mean pose of the file's motion, as for the clips the models learned from.
+PreparedClip prepare_target(const std::string& path, double fps, UpAxis up, const StancePredictor* stance);
 
 // The yaw (degrees, about the up axis) of a normalization's frame-0 heading,
 // and a normalization that places normalized motion into `target`'s file
@@ -74,13 +77,14 @@ struct DecodeReport {
   FootLockReport feet;
 };
 
-// Decodes tokens onto the skeleton of `target_path`, applies `corrections` in
+// Decodes tokens onto the skeleton of `target_path` (prepare_target with `stance`), applies `corrections` in
 // their order above, and writes `out_path` (motion/clip_file.h): BVH in that
 // file's units, up axis, joint names, channels and Euler orders, or a GLB copy
 // of a target asset with the motion as a new animation. InputError when the
 // tokens do not fit the model or the output cannot be written onto the target.
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const std::string& target_path, UpAxis up,
-                         const DecodeCorrections& corrections, const std::string& out_path);
+                         const StancePredictor* stance, const DecodeCorrections& corrections,
+                         const std::string& out_path);
 // The same onto `target`, the clip of `target_path` already prepared for the model (prepare_for_model at the
 // model's fps): a command writing several motions onto one skeleton reads it once.
 DecodeReport decode_onto(TokenizerSession& session, const TokenFile& tokens, const PreparedClip& target,

@@ -1,0 +1,152 @@
+// nec train stance / nec eval stance: the network that gives a rig without motion its creature's stance.
+#include "command_line.h"
+#include "commands.h"
+#include "torch_runtime.h"
+
+#include "nec/corpus/dataset.h"
+#include "nec/motion/error.h"
+#include "nec/motion/files.h"
+#include "nec/owo/stance.h"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+
+namespace nec::app {
+namespace {
+
+std::vector<owo::StanceExample> examples_of(const std::vector<std::string>& caches,
+                                            const owo::StanceExampleOptions& options) {
+  std::vector<owo::StanceExample> out;
+  for (const std::string& dir : caches) {
+    std::vector<owo::StanceExample> some = owo::stance_examples(read_cache(dir), options);
+    out.insert(out.end(), std::make_move_iterator(some.begin()), std::make_move_iterator(some.end()));
+  }
+  return out;
+}
+
+void print_scores(const std::vector<owo::StanceScore>& scores) {
+  fmt::print("{:<34} {:>8} {:>8} {:>9} {:>9} {:>9}\n", "group", "examples", "bones", "median", "mean", "p90");
+  for (const owo::StanceScore& s : scores) {
+    fmt::print("{:<34} {:>8} {:>8} {:>8.1f}° {:>8.1f}° {:>8.1f}°\n", s.group, s.examples, s.bones, s.median, s.mean,
+               s.p90);
+  }
+}
+
+}  // namespace
+
+int run_train_stance(int argc, char** argv) {
+  CommandLine cli("nec train stance",
+                  "Train the stance network: a rig given without motion (one frame in any bind pose) -> where each\n"
+                  "bone points in its creature's typical stance (the mean pose of all its clips, the canonical rest\n"
+                  "the models learned motion around; docs/features.md#stance). Every rig of the caches is shown in\n"
+                  "its file's own rest pose, in frames of its clips and in its stance with joints turned at random.\n"
+                  "Rigs the caches hold out, and those --hold-out patterns name, are not trained on: the held-out\n"
+                  "errors (degrees between predicted and true bone directions) are printed and kept in the checkpoint.");
+  cli.option("--data", "CACHES", "", "dataset caches from `nec prepare`, comma-separated", true);
+  cli.option("--out", "DIR", "", "checkpoint directory (replaced atomically)", true);
+  cli.option("--hold-out", "PATTERNS", "", "skeletons to keep out, comma-separated (as nec train owo's data.held_out)");
+  cli.option("--steps", "N", "3000", "optimizer steps");
+  cli.option("--batch", "N", "32", "examples per step");
+  cli.option("--frames", "N", "12", "poses drawn from each rig's clips");
+  cli.option("--glove", "FILE", "", "word vectors for joint names (with --names)");
+  cli.flag("--names", "read joint names (needs the word vectors)");
+  cli.option("--seed", "N", "1", "initialization, examples and batches");
+  cli.option("--threads", "N", "0", "torch threads (0: every core)");
+  cli.example("nec train stance --data out/default-models/cache --out runs/stance --hold-out '*/bvh/13_*'");
+  if (!cli.parse(argc, argv)) return 0;
+  use_torch_threads(threads_option(cli));
+  const std::string out = cli.value("--out");
+  owo::StanceExampleOptions example_options;
+  example_options.frames_per_rig = cli.integer("--frames");
+  example_options.held_out = cli.list("--hold-out");
+  example_options.seed = static_cast<uint64_t>(cli.integer("--seed"));
+  owo::StanceTrainingOptions options;
+  options.steps = cli.integer("--steps");
+  options.batch_size = cli.integer("--batch");
+  options.seed = example_options.seed;
+  if (options.steps < 1 || options.batch_size < 1) throw UsageError("--steps and --batch must be >= 1");
+  std::optional<text::WordVectors> vectors;
+  if (cli.is_set("--names")) {
+    const std::string glove = cli.value("--glove");
+    vectors.emplace(text::WordVectors::load(glove.empty() ? text::default_word_vectors_path() : glove));
+    options.name_dim = vectors->dim();
+  }
+  const std::vector<std::string> caches = cli.list("--data");
+  const std::vector<owo::StanceExample> examples = examples_of(caches, example_options);
+  std::vector<owo::StanceExample> held_out;
+  for (const owo::StanceExample& e : examples) {
+    if (e.held_out) held_out.push_back(e);
+  }
+  fmt::print("data     {} examples of {} cache(s), {} held out\n", examples.size(), caches.size(), held_out.size());
+  std::fflush(stdout);
+  owo::StanceNet net = owo::train_stance(examples, options, vectors ? &*vectors : nullptr,
+                                               [](const std::string& line) {
+    fmt::print("{}\n", line);
+    std::fflush(stdout);  // progress shows in a log file as it comes
+  });
+  owo::StanceCheckpointInfo info;
+  info.training_step = options.steps;
+  for (const std::string& cache : caches) info.data += (info.data.empty() ? "" : ", ") + cache;
+  info.data += fmt::format(": {} examples, {} held out", examples.size(), held_out.size());
+  info.validation = nlohmann::json::array();
+  owo::save_stance_checkpoint(out, *net, info);
+  const owo::NetworkStance stance = owo::NetworkStance::open(out, cli.value("--glove"));
+  if (!held_out.empty()) {
+    const std::vector<owo::StanceScore> scores =
+        owo::score_stance(stance, held_out, [](const owo::StanceExample& e) { return e.dataset + " / " + e.pose; });
+    print_scores(scores);
+    for (const owo::StanceScore& s : scores) info.validation.push_back(s.to_json());
+    owo::save_stance_checkpoint(out, *net, info);
+  }
+  fmt::print("wrote {}\n", out);
+  return 0;
+}
+
+int run_eval_stance(int argc, char** argv) {
+  CommandLine cli("nec eval stance",
+                  "Score a stance network on the rigs of dataset caches: the angle between each bone's predicted\n"
+                  "and true stance direction (the mean pose of the rig's clips), from the rig's file rest pose, from\n"
+                  "frames of its clips and from its stance with joints turned at random; per dataset and pose.");
+  cli.option("--model", "DIR", "", "stance checkpoint (`nec train stance`)", true);
+  cli.option("--data", "CACHES", "", "dataset caches from `nec prepare`, comma-separated", true);
+  cli.option("--glove", "FILE", "", "word vectors, for a network that reads joint names");
+  cli.option("--frames", "N", "12", "poses drawn from each rig's clips");
+  cli.option("--seed", "N", "2", "which poses and turns");
+  cli.option("--hold-out", "PATTERNS", "", "also score these skeletons (comma-separated, as nec train stance's)");
+  cli.flag("--all", "score every rig, not only those the caches hold out");
+  cli.option("--json", "FILE", "", "also write the scores as JSON");
+  cli.example("nec eval stance --model models/default/stance --data out/real-rigs/cache --all");
+  if (!cli.parse(argc, argv)) return 0;
+  const owo::NetworkStance stance = owo::NetworkStance::open(cli.value("--model"), cli.value("--glove"));
+  owo::StanceExampleOptions options;
+  options.frames_per_rig = cli.integer("--frames");
+  options.seed = static_cast<uint64_t>(cli.integer("--seed"));
+  options.held_out = cli.list("--hold-out");
+  std::vector<owo::StanceExample> examples;
+  for (owo::StanceExample& e : examples_of(cli.list("--data"), options)) {
+    if (cli.is_set("--all") || e.held_out) examples.push_back(std::move(e));
+  }
+  if (examples.empty()) throw InputError(cli.value("--data"), 0, "no held-out rig to score (--all scores every rig)");
+  const auto group = [](const owo::StanceExample& e) { return e.dataset + " / " + e.pose; };
+  const std::vector<owo::StanceScore> scores = owo::score_stance(stance, examples, group);
+  print_scores(scores);
+  // The same rigs with their bind pose kept as the stance (what they had before the network), for comparison.
+  const std::vector<owo::StanceScore> kept = owo::score_stance(BindPoseStance(), examples, group);
+  fmt::print("\nthe bind pose kept as the stance:\n");
+  print_scores(kept);
+  if (!cli.value("--json").empty()) {
+    nlohmann::json all = nlohmann::json::array();
+    for (const owo::StanceScore& s : scores) all.push_back(s.to_json());
+    for (owo::StanceScore s : kept) {
+      s.group += " (bind pose kept)";
+      all.push_back(s.to_json());
+    }
+    write_file_atomic(cli.value("--json"), all.dump(2) + "\n");
+  }
+  return 0;
+}
+
+}  // namespace nec::app

@@ -1,0 +1,69 @@
+// How a person's limbs hang and swing (stance.h): upper arms against straight down, thighs' forward swing.
+#include "nec/corpus/stance.h"
+
+#include "nec/motion/kinematics.h"
+#include "nec/motion/rotations.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace nec {
+namespace {
+
+// The joint called "<side> <part>", else "<side> <fallback>"; -1 when neither has a child to make a bone.
+int limb_joint(const Skeleton& skeleton, const std::vector<std::string>& names, const std::string& side,
+               const std::string& part, const std::string& fallback) {
+  for (const std::string& wanted : {side + " " + part, side + " " + fallback}) {
+    const auto found = std::find(names.begin(), names.end(), wanted);
+    if (found == names.end()) continue;
+    const int joint = static_cast<int>(found - names.begin());
+    return skeleton.children(joint).empty() ? -1 : joint;
+  }
+  return -1;
+}
+
+double quantile(std::vector<double> values, double q) {
+  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size())));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
+
+}  // namespace
+
+LimbAngles measure_limbs(const Clip& normalized, const std::vector<std::string>& canonical_names) {
+  const Skeleton& s = normalized.skeleton;
+  LimbAngles out;
+  const int arms[2] = {limb_joint(s, canonical_names, "left", "upper arm", "arm"),
+                       limb_joint(s, canonical_names, "right", "upper arm", "arm")};
+  const int thighs[2] = {limb_joint(s, canonical_names, "left", "upper leg", "leg"),
+                         limb_joint(s, canonical_names, "right", "upper leg", "leg")};
+  if (arms[0] < 0 || arms[1] < 0 || thighs[0] < 0 || thighs[1] < 0 || normalized.motion.frame_count == 0) return out;
+  const Pose pose = forward_kinematics(s, normalized.motion);
+  const Vec3 up = Vec3::UnitY();
+  auto bone = [&](int t, int joint) {
+    const Vec3 d = pose.position(t, s.children(joint).front()) - pose.position(t, joint);
+    return Vec3(d.norm() > 1e-12 ? Vec3(d.normalized()) : Vec3(-up));
+  };
+  std::vector<double> hanging, pitch[2];
+  for (int t = 0; t < normalized.motion.frame_count; ++t) {
+    for (const int arm : arms) hanging.push_back(std::acos(std::clamp(-bone(t, arm).dot(up), -1.0, 1.0)));
+    Vec3 across = pose.position(t, thighs[0]) - pose.position(t, thighs[1]);
+    across.y() = 0.0;
+    if (across.norm() < 1e-12) continue;
+    const Vec3 forward = across.normalized().cross(up);
+    for (int side = 0; side < 2; ++side) {
+      const Vec3 d = bone(t, thighs[side]);
+      pitch[side].push_back(std::atan2(d.dot(forward), -d.dot(up)));
+    }
+  }
+  out.found = true;
+  out.arms_from_hanging = quantile(hanging, 0.5) * kDegreesPerRadian;
+  double swing = 0.0;
+  for (const std::vector<double>& p : pitch) {
+    if (!p.empty()) swing += 0.5 * (quantile(p, 0.95) - quantile(p, 0.05)) * kDegreesPerRadian;
+  }
+  out.thigh_swing = swing;
+  return out;
+}
+
+}  // namespace nec
