@@ -28,10 +28,11 @@ std::vector<owo::StanceExample> examples_of(const std::vector<std::string>& cach
 }
 
 void print_scores(const std::vector<owo::StanceScore>& scores) {
-  fmt::print("{:<34} {:>8} {:>8} {:>9} {:>9} {:>9}\n", "group", "examples", "bones", "median", "mean", "p90");
+  fmt::print("{:<30} {:>8} {:>6} {:>8} {:>8} {:>8} {:>16}\n", "group", "examples", "bones", "median", "mean", "p90",
+             "median by length");
   for (const owo::StanceScore& s : scores) {
-    fmt::print("{:<34} {:>8} {:>8} {:>8.1f}° {:>8.1f}° {:>8.1f}°\n", s.group, s.examples, s.bones, s.median, s.mean,
-               s.p90);
+    fmt::print("{:<30} {:>8} {:>6} {:>7.1f}° {:>7.1f}° {:>7.1f}° {:>15.1f}°\n", s.group, s.examples, s.bones, s.median,
+               s.mean, s.p90, s.weighted_median);
   }
 }
 

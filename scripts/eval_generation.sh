@@ -13,7 +13,9 @@
 #   apose: the same with the upper arms lowered 45 degrees (an A-pose; rigs without upper arms as in rest);
 #   file: the clip's own file, its stance read from its first frame;
 #   mean: the clip's own file turned around the mean pose of its motion (--rest-from-motion): the protocol before
-#     the stance network, which hands the model the clip's pose (a waving clip's raised arm).
+#     the stance network, which hands the model the clip's pose (a waving clip's raised arm);
+#   bind: the rest-pose copy turned around that pose itself (--rest-from-motion): what a user's T-posed rig got
+#     before the stance network.
 # NEC_CAPTIONS=TSV (lines: a clip's file name, a tab, a caption; `#` comments): generate from those captions
 # instead, for the listed clips only; each sidecar keeps the clip's own first caption, so the evaluator scores
 # a paraphrase's motion against the caption it rewrites (benchmarks/data/paraphrases.tsv).
@@ -30,7 +32,7 @@ model=$1 cache=$2 evaluator=$3 out=$4 split=${5:-test} samples=${6:-1} clips=${7
 nec=${NEC:-build/apps/nec}
 threads=${NEC_THREADS:-2}
 target=${NEC_TARGET:-rest}
-case $target in rest | apose | file | mean) ;; *) echo "NEC_TARGET must be rest, apose, file or mean" >&2; exit 2 ;; esac
+case $target in rest | apose | file | mean | bind) ;; *) echo "NEC_TARGET must be rest, apose, file, mean or bind" >&2; exit 2 ;; esac
 mkdir -p "$out/generated"
 started=$SECONDS
 # One line per clip: dataset, source file, seconds, the caption to generate from, the clip's first caption
@@ -71,11 +73,12 @@ while IFS=$'\t' read -r dataset source seconds caption own; do
   name=$(printf %04d "$count")
   skeleton=$source rest_option=()
   case $target in
-    rest | apose)
+    rest | apose | bind)
       mkdir -p "$out/rest"  # beside generated/, which `nec eval t2m` reads
       skeleton="$out/rest/$name.bvh"
       arms=()
       [ "$target" = apose ] && arms=(--lower-arms 45)
+      [ "$target" = bind ] && rest_option=(--rest-from-motion)
       python3 scripts/rest_pose_bvh.py "$source" "$skeleton" "${arms[@]}" ;;
     mean) rest_option=(--rest-from-motion) ;;
   esac

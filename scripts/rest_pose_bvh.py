@@ -24,7 +24,7 @@ def upper_arm_side(name):
     words = words_of(name)
     side = "left" if ("left" in words or "l" in words) else "right" if ("right" in words or "r" in words) else None
     rest = "".join(w for w in words if w not in ("left", "right", "l", "r"))
-    return side if rest in ("arm", "upperarm", "uparm") else None
+    return side if rest in ("arm", "upperarm", "uparm", "shldr") else None
 
 
 def parse_hierarchy(lines, motion):

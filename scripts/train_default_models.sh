@@ -58,7 +58,7 @@ fi
 # hexapods and two CMU subjects, kept out so that its error on people it never saw is measured.
 step "stance network"
 if [ ! -f "$work/stance.done" ]; then
-  "$nec" train stance --data "$work/cache" --out "$work/stance" --hold-out '*/bvh/13_*,*/bvh/14_*' --names --steps 2400 --batch 16 --threads 1
+  "$nec" train stance --data "$work/cache" --out "$work/stance" --hold-out '*/bvh/13_*,*/bvh/14_*' --names --steps 1200 --batch 16 --threads 1
   touch "$work/stance.done"
 fi
 

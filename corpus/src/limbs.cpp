@@ -10,10 +10,11 @@
 namespace nec {
 namespace {
 
-// The joint called "<side> <part>", else "<side> <fallback>"; -1 when neither has a child to make a bone.
+// The first joint called "<side> <part>" for one of `parts`; -1 when none has a child to make a bone.
 int limb_joint(const Skeleton& skeleton, const std::vector<std::string>& names, const std::string& side,
-               const std::string& part, const std::string& fallback) {
-  for (const std::string& wanted : {side + " " + part, side + " " + fallback}) {
+               const std::vector<std::string>& parts) {
+  for (const std::string& part : parts) {
+    const std::string wanted = side + " " + part;
     const auto found = std::find(names.begin(), names.end(), wanted);
     if (found == names.end()) continue;
     const int joint = static_cast<int>(found - names.begin());
@@ -33,10 +34,12 @@ double quantile(std::vector<double> values, double q) {
 LimbAngles measure_limbs(const Clip& normalized, const std::vector<std::string>& canonical_names) {
   const Skeleton& s = normalized.skeleton;
   LimbAngles out;
-  const int arms[2] = {limb_joint(s, canonical_names, "left", "upper arm", "arm"),
-                       limb_joint(s, canonical_names, "right", "upper arm", "arm")};
-  const int thighs[2] = {limb_joint(s, canonical_names, "left", "upper leg", "leg"),
-                         limb_joint(s, canonical_names, "right", "upper leg", "leg")};
+  // "shldr": the upper arm of Poser / MotionBuilder exports (CMU's lShldr).
+  const std::vector<std::string> arm_names{"upper arm", "arm", "shldr"}, thigh_names{"upper leg", "leg"};
+  const int arms[2] = {limb_joint(s, canonical_names, "left", arm_names),
+                       limb_joint(s, canonical_names, "right", arm_names)};
+  const int thighs[2] = {limb_joint(s, canonical_names, "left", thigh_names),
+                         limb_joint(s, canonical_names, "right", thigh_names)};
   if (arms[0] < 0 || arms[1] < 0 || thighs[0] < 0 || thighs[1] < 0 || normalized.motion.frame_count == 0) return out;
   const Pose pose = forward_kinematics(s, normalized.motion);
   const Vec3 up = Vec3::UnitY();

@@ -207,15 +207,18 @@ PreparedClip take_stance(const PreparedClip& prepared, const StancePredictor& pr
   return out;
 }
 
-std::vector<double> bone_direction_errors(const Skeleton& predicted, const Skeleton& truth) {
+std::vector<double> bone_direction_errors(const Skeleton& predicted, const Skeleton& truth,
+                                          std::vector<double>* lengths) {
   if (predicted.parents != truth.parents) {
     throw std::invalid_argument("bone_direction_errors: the skeletons are not one tree");
   }
   const std::vector<Vec3> a = unit_bones(predicted), b = unit_bones(truth);
   std::vector<double> out;
+  if (lengths) lengths->clear();
   for (size_t j = 0; j < a.size(); ++j) {
     if (a[j].isZero() || b[j].isZero()) continue;
     out.push_back(std::acos(std::clamp(a[j].dot(b[j]), -1.0, 1.0)) * kDegreesPerRadian);
+    if (lengths) lengths->push_back(truth.offsets[j].norm());
   }
   return out;
 }

@@ -77,6 +77,21 @@ SkeletonGraph graph_of(const Skeleton& bind, const std::vector<std::string>& nam
   return make_skeleton_graph(bind, embedded, config.graph);
 }
 
+// The value below which a share `q` of the total weight lies.
+double weighted_percentile(const std::vector<double>& values, const std::vector<double>& weights, double q) {
+  std::vector<size_t> order(values.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return values[a] < values[b]; });
+  double total = 0.0;
+  for (const double w : weights) total += w;
+  double below = 0.0;
+  for (const size_t i : order) {
+    below += weights[i];
+    if (below >= q * total) return values[i];
+  }
+  return values.empty() ? 0.0 : values[order.back()];
+}
+
 double percentile(std::vector<double> values, double q) {
   if (values.empty()) return 0.0;
   const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size())));
@@ -218,34 +233,42 @@ std::vector<StanceExample> stance_examples(const DatasetCache& cache, const Stan
 }
 
 json StanceScore::to_json() const {
-  return {{"group", group}, {"examples", examples}, {"bones", bones},
-          {"median_degrees", median}, {"mean_degrees", mean}, {"p90_degrees", p90}};
+  return {{"group", group},         {"examples", examples}, {"bones", bones},
+          {"median_degrees", median}, {"mean_degrees", mean}, {"p90_degrees", p90},
+          {"length_weighted_median_degrees", weighted_median}};
 }
 
 std::vector<StanceScore> score_stance(const StancePredictor& predictor, const std::vector<StanceExample>& examples,
                                       const std::function<std::string(const StanceExample&)>& group_of) {
+  struct Pool {
+    int64_t examples = 0;
+    std::vector<double> errors, lengths;
+  };
   std::vector<std::string> order;
-  std::map<std::string, std::pair<int64_t, std::vector<double>>> pooled;
+  std::map<std::string, Pool> pooled;
   for (const StanceExample& example : examples) {
     const std::vector<Quat> frames =
         stance_frames(example.bind, predictor.bone_directions(example.bind, example.canonical_names));
+    std::vector<double> lengths;
     const std::vector<double> errors =
-        bone_direction_errors(reexpress_skeleton(example.bind, frames), example.stance);
+        bone_direction_errors(reexpress_skeleton(example.bind, frames), example.stance, &lengths);
     for (const std::string& group : {group_of(example), std::string("all")}) {
       if (!pooled.count(group)) order.push_back(group);
-      auto& [count, all] = pooled[group];
-      ++count;
-      all.insert(all.end(), errors.begin(), errors.end());
+      Pool& pool = pooled[group];
+      ++pool.examples;
+      pool.errors.insert(pool.errors.end(), errors.begin(), errors.end());
+      pool.lengths.insert(pool.lengths.end(), lengths.begin(), lengths.end());
     }
   }
   std::vector<StanceScore> out;
   for (const std::string& group : order) {
-    const auto& [count, errors] = pooled[group];
+    const std::vector<double>& errors = pooled[group].errors;
     StanceScore score;
     score.group = group;
-    score.examples = count;
+    score.examples = pooled[group].examples;
     score.bones = static_cast<int64_t>(errors.size());
     score.median = percentile(errors, 0.5);
+    score.weighted_median = weighted_percentile(errors, pooled[group].lengths, 0.5);
     score.p90 = percentile(errors, 0.9);
     double sum = 0.0;
     for (const double e : errors) sum += e;

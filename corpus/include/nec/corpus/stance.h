@@ -67,8 +67,10 @@ std::vector<Quat> stance_frames(const Skeleton& bind, const std::vector<Vec3>& d
 PreparedClip take_stance(const PreparedClip& prepared, const StancePredictor& predictor);
 
 // Angles (degrees) between the bone directions of two skeletons of one tree, one per joint whose bone is
-// longer than 1e-9 in both: how far a predicted stance is from the true one.
-std::vector<double> bone_direction_errors(const Skeleton& predicted, const Skeleton& truth);
+// longer than 1e-9 in both: how far a predicted stance is from the true one. `lengths`, when given, gets the
+// truth's length of each of those bones (to weigh a finger less than a thigh).
+std::vector<double> bone_direction_errors(const Skeleton& predicted, const Skeleton& truth,
+                                          std::vector<double>* lengths = nullptr);
 
 // How a person's limbs hang and swing over a prepared clip (+Y up): what shows a stance taken or missed.
 struct LimbAngles {
@@ -76,8 +78,9 @@ struct LimbAngles {
   double arms_from_hanging = 0.0;  // degrees between the upper arms and straight down, median over frames
   double thigh_swing = 0.0;        // degrees the thighs swing forward and back (5th to 95th percentile)
 };
-// The upper arm is the joint named "upper arm", else "arm" (CMU, Mixamo), and its bone the one to its first
-// child; the thigh likewise "upper leg". Forward is across the hips' left-right line.
+// The upper arm is the joint named "upper arm", else "arm" (CMU, Mixamo), else "shldr" (Poser), and its bone
+// the one to its first child; the thigh likewise "upper leg", else "leg". Forward is across the thighs'
+// left-right line.
 LimbAngles measure_limbs(const Clip& normalized, const std::vector<std::string>& canonical_names);
 
 }  // namespace nec

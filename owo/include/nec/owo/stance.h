@@ -111,9 +111,10 @@ struct StanceScore {
   std::string group;      // e.g. "held out / file rest" or "cmu"
   int64_t examples = 0;
   int64_t bones = 0;
-  double median = 0.0;    // degrees
+  double median = 0.0;           // degrees, over bones
   double mean = 0.0;
   double p90 = 0.0;
+  double weighted_median = 0.0;  // over the body's length: half of it is off by less (a finger weighs little)
 
   nlohmann::json to_json() const;
 };
