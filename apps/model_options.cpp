@@ -3,6 +3,7 @@
 
 #include "torch_runtime.h"
 
+#include "nec/motion/error.h"
 #include "nec/owo/stance.h"
 
 #include <fmt/format.h>
@@ -84,14 +85,18 @@ std::unique_ptr<StancePredictor> open_stance(const CommandLine& cli, const std::
     if (!cli.value("--stance").empty()) throw UsageError("--stance and --rest-from-motion exclude each other");
     return nullptr;
   }
-  std::string dir = cli.value("--stance");
-  if (dir.empty()) dir = default_model_dir("stance");
-  if (dir.empty()) {
-    fmt::print(stderr, "note: no stance network (models/default/stance): the skeleton's rest is the mean pose of its "
-                       "motion\n");
-    return nullptr;
+  if (!cli.value("--stance").empty()) {
+    return std::make_unique<owo::NetworkStance>(owo::NetworkStance::open(cli.value("--stance"), glove));
   }
-  return std::make_unique<owo::NetworkStance>(owo::NetworkStance::open(dir, glove));
+  const std::string dir = default_model_dir("stance");
+  try {
+    if (!dir.empty()) return std::make_unique<owo::NetworkStance>(owo::NetworkStance::open(dir, glove));
+    fmt::print(stderr, "note: no stance network in models/default/stance");
+  } catch (const InputError& e) {  // e.g. the word vectors it reads joint names with are not installed
+    fmt::print(stderr, "note: the default stance network cannot be used: {}", e.what());
+  }
+  fmt::print(stderr, "; the skeleton's rest is the mean pose of its motion\n");
+  return nullptr;
 }
 
 }  // namespace nec::app

@@ -42,8 +42,9 @@ tat::TokenizerSession open_tokenizer(const TokenizerOptions& options);
 // around (tat::prepare_target).
 void declare_stance_options(CommandLine& cli);
 // The stance network those options ask for (--stance, else the default models' models/default/stance), or null
-// with --rest-from-motion, or when there is no default one (a note on stderr says the mean pose is used).
-// `glove`: the word vectors, for a network that reads joint names. InputError for a damaged checkpoint.
+// with --rest-from-motion, or when the default one is missing or cannot be used (no word vectors: a note on
+// stderr says the mean pose is used). `glove`: the word vectors, for a network that reads joint names.
+// InputError for a --stance checkpoint that cannot be used.
 std::unique_ptr<StancePredictor> open_stance(const CommandLine& cli, const std::string& glove);
 
 }  // namespace nec::app
