@@ -35,6 +35,6 @@ for rig_kind in tpose apose first motion; do
   generate "$rig_kind" "$out/rigs/$rig_kind.bvh" "${stance[@]}"
 done
 for rig_kind in tpose motion; do
-  generate "$rig_kind (mean pose)" "$out/rigs/$rig_kind.bvh" --rest-from-motion
+  generate "${rig_kind}_mean_pose" "$out/rigs/$rig_kind.bvh" --rest-from-motion
 done
 printf '%-28s %s\n' "T-pose against A-pose" "$(python3 scripts/compare_bvh_positions.py "$out/tpose.bvh" "$out/apose.bvh")"
