@@ -27,6 +27,16 @@ std::vector<owo::StanceExample> examples_of(const std::vector<std::string>& cach
   return out;
 }
 
+// --frames, --hold-out and --seed: which examples are drawn.
+owo::StanceExampleOptions example_options(const CommandLine& cli) {
+  owo::StanceExampleOptions options;
+  options.frames_per_rig = cli.integer("--frames");
+  options.held_out = cli.list("--hold-out");
+  options.seed = static_cast<uint64_t>(cli.integer("--seed"));
+  if (options.frames_per_rig < 0) throw UsageError("--frames must be >= 0");
+  return options;
+}
+
 void print_scores(const std::vector<owo::StanceScore>& scores) {
   fmt::print("{:<30} {:>8} {:>6} {:>8} {:>8} {:>8} {:>16}\n", "group", "examples", "bones", "median", "mean", "p90",
              "median by length");
@@ -49,25 +59,22 @@ int run_train_stance(int argc, char** argv) {
   cli.option("--data", "CACHES", "", "dataset caches from `nec prepare`, comma-separated", true);
   cli.option("--out", "DIR", "", "checkpoint directory (replaced atomically)", true);
   cli.option("--hold-out", "PATTERNS", "", "skeletons to keep out, comma-separated (as nec train owo's data.held_out)");
-  cli.option("--steps", "N", "3000", "optimizer steps");
-  cli.option("--batch", "N", "32", "examples per step");
+  cli.option("--steps", "N", "1200", "optimizer steps");
+  cli.option("--batch", "N", "16", "examples per step");
   cli.option("--frames", "N", "12", "poses drawn from each rig's clips");
   cli.option("--glove", "FILE", "", "word vectors for joint names (with --names)");
   cli.flag("--names", "read joint names (needs the word vectors)");
   cli.option("--seed", "N", "1", "initialization, examples and batches");
-  cli.option("--threads", "N", "0", "torch threads (0: every core)");
+  cli.option("--threads", "N", "1", "torch threads (0: every core; one is fastest for these small batches)");
   cli.example("nec train stance --data out/default-models/cache --out runs/stance --hold-out '*/bvh/13_*'");
   if (!cli.parse(argc, argv)) return 0;
   use_torch_threads(threads_option(cli));
   const std::string out = cli.value("--out");
-  owo::StanceExampleOptions example_options;
-  example_options.frames_per_rig = cli.integer("--frames");
-  example_options.held_out = cli.list("--hold-out");
-  example_options.seed = static_cast<uint64_t>(cli.integer("--seed"));
+  const owo::StanceExampleOptions examples_drawn = example_options(cli);
   owo::StanceTrainingOptions options;
   options.steps = cli.integer("--steps");
   options.batch_size = cli.integer("--batch");
-  options.seed = example_options.seed;
+  options.seed = examples_drawn.seed;
   if (options.steps < 1 || options.batch_size < 1) throw UsageError("--steps and --batch must be >= 1");
   std::optional<text::WordVectors> vectors;
   if (cli.is_set("--names")) {
@@ -76,7 +83,7 @@ int run_train_stance(int argc, char** argv) {
     options.name_dim = vectors->dim();
   }
   const std::vector<std::string> caches = cli.list("--data");
-  const std::vector<owo::StanceExample> examples = examples_of(caches, example_options);
+  const std::vector<owo::StanceExample> examples = examples_of(caches, examples_drawn);
   std::vector<owo::StanceExample> held_out;
   for (const owo::StanceExample& e : examples) {
     if (e.held_out) held_out.push_back(e);
@@ -122,12 +129,8 @@ int run_eval_stance(int argc, char** argv) {
   cli.example("nec eval stance --model models/default/stance --data out/real-rigs/cache --all");
   if (!cli.parse(argc, argv)) return 0;
   const owo::NetworkStance stance = owo::NetworkStance::open(cli.value("--model"), cli.value("--glove"));
-  owo::StanceExampleOptions options;
-  options.frames_per_rig = cli.integer("--frames");
-  options.seed = static_cast<uint64_t>(cli.integer("--seed"));
-  options.held_out = cli.list("--hold-out");
   std::vector<owo::StanceExample> examples;
-  for (owo::StanceExample& e : examples_of(cli.list("--data"), options)) {
+  for (owo::StanceExample& e : examples_of(cli.list("--data"), example_options(cli))) {
     if (cli.is_set("--all") || e.held_out) examples.push_back(std::move(e));
   }
   if (examples.empty()) throw InputError(cli.value("--data"), 0, "no held-out rig to score (--all scores every rig)");

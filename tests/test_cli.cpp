@@ -202,6 +202,26 @@ TEST_F(Cli, PrepareCaptionsClipsFromTakeDescriptionsFoundBelowTheTable) {
   EXPECT_GT(described, 0);
 }
 
+TEST_F(Cli, PrepareFlagsAnImplausibleFrameTimeAndTakesTheTrueRate) {
+  if (!fs::exists(kCmu)) GTEST_SKIP() << "assimp-testmodels is not installed";
+  // 01_01's first two seconds of 120-fps capture, written as if each frame lasted a second.
+  Clip clip = read_bvh(kCmu);
+  clip.motion = clip.motion.slice(0, 240);
+  clip.motion.fps = 1.0;
+  fs::create_directories(path("slow"));
+  write_bvh(path("slow/slow.bvh"), clip.skeleton, clip.motion);
+  const CommandResult flagged = run_nec("prepare " + path("slow") + " -o " + path("slow_cache"));
+  ASSERT_EQ(flagged.exit_code, 0) << flagged.output;
+  EXPECT_TRUE(contains(flagged.output, "a Frame Time of")) << flagged.output;
+  const CommandResult given = run_nec("prepare " + path("slow") + " -o " + path("given_cache") + " --source-fps 120");
+  ASSERT_EQ(given.exit_code, 0) << given.output;
+  EXPECT_FALSE(contains(given.output, "Frame Time")) << given.output;
+  EXPECT_TRUE(contains(given.output, "resampled 120 -> 30 fps")) << given.output;
+  const CommandResult negative = run_nec("prepare " + path("slow") + " -o " + path("bad_cache") + " --source-fps -1");
+  EXPECT_EQ(negative.exit_code, 2) << negative.output;
+  EXPECT_FALSE(fs::exists(path("bad_cache")));
+}
+
 TEST_F(Cli, AssetsInAndOutThroughTheCommands) {
   const std::string wuson = "/usr/share/assimp/models/X/Testwuson.X";
   if (!fs::exists(wuson)) GTEST_SKIP() << "assimp-testmodels is not installed";
