@@ -90,25 +90,23 @@ int run_train_stance(int argc, char** argv) {
   }
   fmt::print("data     {} examples of {} cache(s), {} held out\n", examples.size(), caches.size(), held_out.size());
   std::fflush(stdout);
-  owo::StanceNet net = owo::train_stance(examples, options, vectors ? &*vectors : nullptr,
-                                               [](const std::string& line) {
-    fmt::print("{}\n", line);
-    std::fflush(stdout);  // progress shows in a log file as it comes
-  });
   owo::StanceCheckpointInfo info;
   info.training_step = options.steps;
   for (const std::string& cache : caches) info.data += (info.data.empty() ? "" : ", ") + cache;
   info.data += fmt::format(": {} examples, {} held out", examples.size(), held_out.size());
   info.validation = nlohmann::json::array();
-  owo::save_stance_checkpoint(out, *net, info);
-  const owo::NetworkStance stance = owo::NetworkStance::open(out, cli.value("--glove"));
+  const owo::NetworkStance stance(owo::train_stance(examples, options, vectors ? &*vectors : nullptr,
+                                                    [](const std::string& line) {
+                                                      fmt::print("{}\n", line);
+                                                      std::fflush(stdout);  // progress shows in a log as it comes
+                                                    }),
+                                  info, std::move(vectors));
   if (!held_out.empty()) {
-    const std::vector<owo::StanceScore> scores =
-        owo::score_stance(stance, held_out, [](const owo::StanceExample& e) { return e.dataset + " / " + e.pose; });
+    const std::vector<owo::StanceScore> scores = owo::score_stance(stance, held_out, owo::by_dataset_and_pose);
     print_scores(scores);
     for (const owo::StanceScore& s : scores) info.validation.push_back(s.to_json());
-    owo::save_stance_checkpoint(out, *net, info);
   }
+  owo::save_stance_checkpoint(out, stance.net(), info);
   fmt::print("wrote {}\n", out);
   return 0;
 }
@@ -134,7 +132,7 @@ int run_eval_stance(int argc, char** argv) {
     if (cli.is_set("--all") || e.held_out) examples.push_back(std::move(e));
   }
   if (examples.empty()) throw InputError(cli.value("--data"), 0, "no held-out rig to score (--all scores every rig)");
-  const auto group = [](const owo::StanceExample& e) { return e.dataset + " / " + e.pose; };
+  const auto group = owo::by_dataset_and_pose;
   const std::vector<owo::StanceScore> scores = owo::score_stance(stance, examples, group);
   print_scores(scores);
   // The same rigs with their bind pose kept as the stance (what they had before the network), for comparison.

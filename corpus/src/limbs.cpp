@@ -3,6 +3,7 @@
 
 #include "nec/motion/kinematics.h"
 #include "nec/motion/rotations.h"
+#include "nec/motion/statistics.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,12 +22,6 @@ int limb_joint(const Skeleton& skeleton, const std::vector<std::string>& names, 
     return skeleton.children(joint).empty() ? -1 : joint;
   }
   return -1;
-}
-
-double quantile(std::vector<double> values, double q) {
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size())));
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-  return values[k];
 }
 
 }  // namespace
@@ -60,10 +55,10 @@ LimbAngles measure_limbs(const Clip& normalized, const std::vector<std::string>&
     }
   }
   out.found = true;
-  out.arms_from_hanging = quantile(hanging, 0.5) * kDegreesPerRadian;
+  out.arms_from_hanging = upper_median(hanging) * kDegreesPerRadian;
   double swing = 0.0;
   for (const std::vector<double>& p : pitch) {
-    if (!p.empty()) swing += 0.5 * (quantile(p, 0.95) - quantile(p, 0.05)) * kDegreesPerRadian;
+    if (!p.empty()) swing += 0.5 * (lower_quantile(p, 0.95) - lower_quantile(p, 0.05)) * kDegreesPerRadian;
   }
   out.thigh_swing = swing;
   return out;

@@ -13,6 +13,7 @@
 #include "nec/motion/files.h"
 #include "nec/motion/random.h"
 #include "nec/motion/rotations.h"
+#include "nec/motion/statistics.h"
 
 #include <fmt/format.h>
 #include <torch/torch.h>
@@ -90,13 +91,6 @@ double weighted_percentile(const std::vector<double>& values, const std::vector<
     if (below >= q * total) return values[i];
   }
   return values.empty() ? 0.0 : values[order.back()];
-}
-
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * static_cast<double>(values.size())));
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-  return values[k];
 }
 
 }  // namespace
@@ -238,6 +232,8 @@ json StanceScore::to_json() const {
           {"length_weighted_median_degrees", weighted_median}};
 }
 
+std::string by_dataset_and_pose(const StanceExample& example) { return example.dataset + " / " + example.pose; }
+
 std::vector<StanceScore> score_stance(const StancePredictor& predictor, const std::vector<StanceExample>& examples,
                                       const std::function<std::string(const StanceExample&)>& group_of) {
   struct Pool {
@@ -267,9 +263,9 @@ std::vector<StanceScore> score_stance(const StancePredictor& predictor, const st
     score.group = group;
     score.examples = pooled[group].examples;
     score.bones = static_cast<int64_t>(errors.size());
-    score.median = percentile(errors, 0.5);
+    score.median = upper_median(errors);
     score.weighted_median = weighted_percentile(errors, pooled[group].lengths, 0.5);
-    score.p90 = percentile(errors, 0.9);
+    score.p90 = lower_quantile(errors, 0.9);
     double sum = 0.0;
     for (const double e : errors) sum += e;
     score.mean = errors.empty() ? 0.0 : sum / static_cast<double>(errors.size());

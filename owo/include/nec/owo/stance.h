@@ -70,13 +70,15 @@ class NetworkStance : public StancePredictor {
  public:
   // Loads the checkpoint `dir` and, when it reads joint names, the word vectors `glove` (default file when empty).
   static NetworkStance open(const std::string& dir, const std::string& glove);
+  // A network in memory (just trained), with the word vectors it reads names with (none for name_dim 0).
+  NetworkStance(StanceNet net, StanceCheckpointInfo info, std::optional<text::WordVectors> vectors);
 
   std::vector<Vec3> bone_directions(const Skeleton& bind,
                                     const std::vector<std::string>& canonical_names) const override;
   const StanceCheckpointInfo& info() const { return info_; }
+  StanceNetImpl& net() const { return *net_; }
 
  private:
-  NetworkStance(StanceNet net, StanceCheckpointInfo info, std::optional<text::WordVectors> vectors);
   mutable StanceNet net_{nullptr};  // forward() is not const; inference changes nothing
   StanceCheckpointInfo info_;
   std::optional<text::WordVectors> vectors_;
@@ -120,6 +122,8 @@ struct StanceScore {
 };
 // The stance take_stance would give each example (the network, then stance_frames), scored against its truth:
 // one score per distinct `group_of(example)`, in order of first appearance, and one for all ("all").
+// by_dataset_and_pose groups as `nec eval stance` prints them: "bandai / file rest".
+std::string by_dataset_and_pose(const StanceExample& example);
 std::vector<StanceScore> score_stance(const StancePredictor& predictor, const std::vector<StanceExample>& examples,
                                       const std::function<std::string(const StanceExample&)>& group_of);
 
