@@ -194,7 +194,7 @@ int run_generate(int argc, char** argv) {
     if (diffusion_sampling.steps > noise_steps) {
       throw UsageError(fmt::format("--steps {} is more than the model's {} noise steps", diffusion_sampling.steps, noise_steps));
     }
-    target = tat::prepare_target(cli.value("--skeleton"), fps, up, stance.get());
+    target = prepare_target(cli.value("--skeleton"), fps, up, stance.get());
     const int64_t window = diffusion_session->model.model->config().max_frames;
     std::vector<diffusion::DiffusionSegment> segments;
     for (size_t i = 0; i < captions.size(); ++i) {
@@ -209,7 +209,7 @@ int run_generate(int argc, char** argv) {
   } else {
     gpt_session.emplace(gpt::open_generator(model, cli.value("--glove")));
     fps = gpt_session->fps();
-    target = tat::prepare_target(cli.value("--skeleton"), fps, up, stance.get());
+    target = prepare_target(cli.value("--skeleton"), fps, up, stance.get());
     std::vector<gpt::Segment> segments;
     for (size_t i = 0; i < captions.size(); ++i) {
       const int64_t steps = std::max<int64_t>(1, std::lround(seconds[i] * fps / gpt_session->downsampling()));

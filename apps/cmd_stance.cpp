@@ -53,7 +53,8 @@ int run_train_stance(int argc, char** argv) {
                   "Train the stance network: a rig given without motion (one frame in any bind pose) -> where each\n"
                   "bone points in its creature's typical stance (the mean pose of all its clips, the canonical rest\n"
                   "the models learned motion around; docs/features.md#stance). Every rig of the caches is shown in\n"
-                  "its file's own rest pose, in frames of its clips and in its stance with joints turned at random.\n"
+                  "its file's own rest pose, in frames of its clips and in its stance and its rest pose with joints\n"
+                  "turned at random.\n"
                   "Rigs the caches hold out, and those --hold-out patterns name, are not trained on: the held-out\n"
                   "errors (degrees between predicted and true bone directions) are printed and kept in the checkpoint.");
   cli.option("--data", "CACHES", "", "dataset caches from `nec prepare`, comma-separated", true);
@@ -65,12 +66,20 @@ int run_train_stance(int argc, char** argv) {
   cli.option("--glove", "FILE", "", "word vectors for joint names (with --names)");
   cli.flag("--names", "read joint names (needs the word vectors)");
   cli.option("--seed", "N", "1", "initialization, examples and batches");
+  cli.option("--rest-turned", "N", "4", "the file's rest pose with joints turned at random, per rig");
+  cli.option("--length-jitter", "X", "0", "training rigs' bone lengths scaled by 1 +- X, each bone on its own");
   cli.option("--threads", "N", "1", "torch threads (0: every core; one is fastest for these small batches)");
   cli.example("nec train stance --data out/default-models/cache --out runs/stance --hold-out '*/bvh/13_*'");
   if (!cli.parse(argc, argv)) return 0;
   use_torch_threads(threads_option(cli));
   const std::string out = cli.value("--out");
-  const owo::StanceExampleOptions examples_drawn = example_options(cli);
+  owo::StanceExampleOptions examples_drawn = example_options(cli);
+  examples_drawn.length_jitter = cli.number("--length-jitter");
+  examples_drawn.rest_turned_per_rig = cli.integer("--rest-turned");
+  if (examples_drawn.length_jitter < 0.0 || examples_drawn.length_jitter >= 1.0) {
+    throw UsageError("--length-jitter must be in [0, 1)");
+  }
+  if (examples_drawn.rest_turned_per_rig < 0) throw UsageError("--rest-turned must be >= 0");
   owo::StanceTrainingOptions options;
   options.steps = cli.integer("--steps");
   options.batch_size = cli.integer("--batch");
@@ -115,7 +124,8 @@ int run_eval_stance(int argc, char** argv) {
   CommandLine cli("nec eval stance",
                   "Score a stance network on the rigs of dataset caches: the angle between each bone's predicted\n"
                   "and true stance direction (the mean pose of the rig's clips), from the rig's file rest pose, from\n"
-                  "frames of its clips and from its stance with joints turned at random; per dataset and pose.");
+                  "frames of its clips and from its stance and its rest pose with joints turned at random; per\n"
+                  "dataset and pose.");
   cli.option("--model", "DIR", "", "stance checkpoint (`nec train stance`)", true);
   cli.option("--data", "CACHES", "", "dataset caches from `nec prepare`, comma-separated", true);
   cli.option("--glove", "FILE", "", "word vectors, for a network that reads joint names");

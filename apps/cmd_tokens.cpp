@@ -106,8 +106,10 @@ int run_decode(int argc, char** argv) {
   tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
   const tat::TokenFile tokens = tat::read_tokens(cli.positional_value("TOKENS.json"));
   const std::unique_ptr<StancePredictor> stance = open_stance(cli, cli.value("--glove"));
-  const tat::DecodeReport report = tat::decode_onto(session, tokens, cli.value("--skeleton"), cli.up_axis("--up"),
-                                                    stance.get(), corrections(cli, nullptr), cli.value("-o"));
+  const PreparedClip target = prepare_target(cli.value("--skeleton"), session.model.info.fps, cli.up_axis("--up"),
+                                             stance.get());
+  const tat::DecodeReport report = tat::decode_onto(session, tokens, target, cli.value("--skeleton"),
+                                                    corrections(cli, nullptr), cli.value("-o"));
   fmt::print("wrote {}: {} frames on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
              cli.value("--skeleton"), decode_summary(report), seconds_since(start));
   return 0;
@@ -141,9 +143,10 @@ int run_transfer(int argc, char** argv) {
   const PreparedClip source = tat::prepare_for_model(path, session.model.info.fps, cli.up_axis("--up"));
   const tat::TokenFile tokens = tat::encode_file(session, source, path);
   const std::unique_ptr<StancePredictor> stance = open_stance(cli, cli.value("--glove"));
+  const PreparedClip target = prepare_target(cli.value("--to"), session.model.info.fps, cli.up_axis("--up"),
+                                             stance.get());
   const tat::DecodeReport report =
-      tat::decode_onto(session, tokens, cli.value("--to"), cli.up_axis("--up"), stance.get(),
-                       corrections(cli, &source.clip), cli.value("-o"));
+      tat::decode_onto(session, tokens, target, cli.value("--to"), corrections(cli, &source.clip), cli.value("-o"));
   if (!cli.value("--tokens").empty()) tat::write_tokens(cli.value("--tokens"), tokens);
   fmt::print("wrote {}: {} frames of {} on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames, path,
              cli.value("--to"), decode_summary(report), seconds_since(start));

@@ -99,4 +99,10 @@ std::unique_ptr<StancePredictor> open_stance(const CommandLine& cli, const std::
   return nullptr;
 }
 
+PreparedClip prepare_target(const std::string& path, double fps, UpAxis up, const StancePredictor* stance) {
+  PreparedClip target = tat::prepare_target(path, fps, up, stance);
+  for (const std::string& warning : target.report.warnings) fmt::print(stderr, "note: {}: {}\n", path, warning);
+  return target;
+}
+
 }  // namespace nec::app

@@ -46,5 +46,7 @@ void declare_stance_options(CommandLine& cli);
 // stderr says the mean pose is used). `glove`: the word vectors, for a network that reads joint names.
 // InputError for a --stance checkpoint that cannot be used.
 std::unique_ptr<StancePredictor> open_stance(const CommandLine& cli, const std::string& glove);
+// tat::prepare_target, with the target's warnings (a skeleton without limbs, joints on their parents) on stderr.
+PreparedClip prepare_target(const std::string& path, double fps, UpAxis up, const StancePredictor* stance);
 
 }  // namespace nec::app

@@ -267,6 +267,50 @@ TEST_F(CliGpt, GeneratesAroundTheStanceOfTheSkeleton) {
   EXPECT_EQ(foreign.exit_code, 1) << foreign.output;
   EXPECT_TRUE(contains(foreign.output, "config.json")) << foreign.output;
   EXPECT_FALSE(fs::exists(path("both.bvh")) || fs::exists(path("foreign.bvh")));
+
+  // Rigs the stance cannot do much with: a leg of joints lying on their parents and a body without limbs are
+  // said and still move; a skeleton whose joints all overlap is refused with no output.
+  Clip collapsed = source;
+  const int leg = collapsed.skeleton.children(0).back();
+  const auto in_leg = [&](int j) {
+    while (j > leg) j = collapsed.skeleton.parents[j];
+    return j == leg;
+  };
+  for (int j = leg; j < collapsed.skeleton.joint_count(); ++j) {
+    if (in_leg(j)) collapsed.skeleton.offsets[j].setZero();
+  }
+  for (EndSite& site : collapsed.skeleton.end_sites) {
+    if (in_leg(site.parent)) site.offset.setZero();
+  }
+  write_bvh(path("collapsed.bvh"), collapsed.skeleton, collapsed.motion.slice(0, 1));
+  const std::string chain_header =
+      "HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+      " JOINT Spine\n {\n  OFFSET 0 {0} 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n"
+      "  JOINT Head\n  {\n   OFFSET 0 {0} 0\n   CHANNELS 3 Zrotation Xrotation Yrotation\n"
+      "   End Site\n   {\n    OFFSET 0 {0} 0\n   }\n  }\n }\n}\nMOTION\nFrames: 1\nFrame Time: 0.0333333\n"
+      "0 0 0 0 0 0 0 0 0 0 0 0\n";
+  const auto chain_of = [&](const std::string& length) {
+    std::string text = chain_header;
+    for (size_t at; (at = text.find("{0}")) != std::string::npos;) text.replace(at, 3, length);
+    return text;
+  };
+  write_file_atomic(path("chain.bvh"), chain_of("10"));
+  write_file_atomic(path("overlapping.bvh"), chain_of("0"));
+  for (const auto& [rig, said] : {std::pair<std::string, std::string>{"collapsed", "lie on their parents"},
+                                  {"chain", "one chain, no limbs"}}) {
+    const CommandResult made = run_nec(generate("\"a spider walks\" --skeleton " + path(rig + ".bvh") +
+                                                " --seconds 1 --stance " + stance + " -o " + path(rig + "_out.bvh")));
+    ASSERT_EQ(made.exit_code, 0) << rig << "\n" << made.output;
+    EXPECT_TRUE(contains(made.output, "note: " + path(rig + ".bvh") + ": ") && contains(made.output, said))
+        << rig << "\n" << made.output;
+    EXPECT_GT(read_bvh(path(rig + "_out.bvh")).motion.frame_count, 1) << rig;
+  }
+  const CommandResult overlapping = run_nec(generate("\"a spider walks\" --skeleton " + path("overlapping.bvh") +
+                                                     " --stance " + stance + " -o " + path("overlapping_out.bvh")));
+  EXPECT_EQ(overlapping.exit_code, 1) << overlapping.output;
+  EXPECT_TRUE(contains(overlapping.output, "overlapping.bvh") && contains(overlapping.output, "zero size"))
+      << overlapping.output;
+  EXPECT_FALSE(fs::exists(path("overlapping_out.bvh")));
 }
 
 TEST_F(CliGpt, BadInputGetsOneLineAndNoOutput) {

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -66,8 +67,9 @@ TEST(OwoStance, ExamplesShowEachRigInSeveralPosesAgainstOneTruth) {
   owo::StanceExampleOptions options;
   options.frames_per_rig = 3;
   options.turned_per_rig = 2;
+  options.rest_turned_per_rig = 2;
   const std::vector<owo::StanceExample> examples = owo::stance_examples(cache, options);
-  ASSERT_EQ(examples.size(), 4u * (1 + 3 + 2));  // four rigs: file rest, frames, turned
+  ASSERT_EQ(examples.size(), 4u * (1 + 3 + 2 + 2));  // four rigs: file rest, frames, turned, rest turned
   std::map<std::string, int> held;
   for (const owo::StanceExample& e : examples) {
     held[e.rig] += e.held_out ? 1 : 0;
@@ -76,7 +78,7 @@ TEST(OwoStance, ExamplesShowEachRigInSeveralPosesAgainstOneTruth) {
     EXPECT_NEAR(e.bind.diameter(), 1.0, 1e-6);
   }
   EXPECT_EQ(held["biped-0"], 0);
-  EXPECT_EQ(held["biped-1"], 6);
+  EXPECT_EQ(held["biped-1"], 8);
   // The truth is the mean pose of the rig's clips: given it, the score is zero; the bind poses differ from it.
   class Truth : public StancePredictor {
    public:
@@ -97,6 +99,35 @@ TEST(OwoStance, ExamplesShowEachRigInSeveralPosesAgainstOneTruth) {
   const auto by_pose = [](const owo::StanceExample& e) { return e.pose; };
   EXPECT_LT(median_of(owo::score_stance(Truth(bipeds), bipeds, by_pose)), 1e-3);
   EXPECT_GT(median_of(owo::score_stance(BindPoseStance(), bipeds, by_pose)), 2.0);
+
+  // Length jitter gives the training rigs proportions of their own, the truth in the same proportions; held-out
+  // rigs are scored as they are.
+  options.length_jitter = 0.2;
+  const std::vector<owo::StanceExample> jittered = owo::stance_examples(cache, options);
+  ASSERT_EQ(jittered.size(), examples.size());
+  const auto lengths = [](const Skeleton& s) {
+    std::vector<double> out;
+    for (int j = 1; j < s.joint_count(); ++j) out.push_back(s.offsets[j].norm());
+    return out;
+  };
+  const auto spread_of_ratios = [](const std::vector<double>& a, const std::vector<double>& b) {
+    double low = 1e9, high = 0.0;
+    for (size_t j = 0; j < a.size(); ++j) {
+      if (b[j] < 1e-9) continue;
+      low = std::min(low, a[j] / b[j]);
+      high = std::max(high, a[j] / b[j]);
+    }
+    return high / low - 1.0;
+  };
+  for (size_t i = 0; i < examples.size(); ++i) {
+    const std::vector<double> before = lengths(examples[i].bind), after = lengths(jittered[i].bind);
+    EXPECT_LT(spread_of_ratios(lengths(jittered[i].stance), after), 1e-6) << jittered[i].rig << " " << jittered[i].pose;
+    if (jittered[i].held_out) {
+      EXPECT_LT(spread_of_ratios(after, before), 1e-6) << jittered[i].rig;
+    } else {
+      EXPECT_GT(spread_of_ratios(after, before), 0.05) << jittered[i].rig;
+    }
+  }
 }
 
 TEST(OwoStance, ShortTrainingBeatsKeepingTheBindPoseOnUnseenRigs) {
@@ -124,7 +155,7 @@ TEST(OwoStance, ShortTrainingBeatsKeepingTheBindPoseOnUnseenRigs) {
   for (const owo::StanceExample& e : examples) {
     if (e.held_out) unseen.push_back(e);
   }
-  ASSERT_EQ(unseen.size(), 2u * (1 + 2 + 8));
+  ASSERT_EQ(unseen.size(), 2u * (1 + 2 + 8 + options.rest_turned_per_rig));
   const auto all = [](const owo::StanceExample&) { return std::string("unseen"); };
   const double learned = median_of(owo::score_stance(stance, unseen, all));
   const double kept = median_of(owo::score_stance(BindPoseStance(), unseen, all));

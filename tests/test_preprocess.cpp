@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 namespace nec {
 namespace {
 
@@ -112,6 +114,14 @@ TEST(Preprocess, HeadingAndUpAxisInvariance) {
   }
   EXPECT_EQ(detect_up_axis(rotated(walking_biped(), y_to_z)), UpAxis::Z);
   EXPECT_EQ(detect_up_axis(walking_biped()), UpAxis::Y);
+  // A one-frame rig in its bind pose, its toes ahead of the root, as Blender exports an armature (+Z up): CMU's
+  // T-pose.
+  const std::string cmu = "/usr/share/assimp/models/BVH/01_01.bvh";
+  if (!std::filesystem::exists(cmu)) GTEST_SKIP() << "assimp-testmodels is not installed";
+  Clip tpose = read_bvh(cmu);
+  tpose.motion = Motion::rest(tpose.skeleton, 1, 30.0);
+  EXPECT_EQ(detect_up_axis(tpose), UpAxis::Y);
+  EXPECT_EQ(detect_up_axis(rotated(tpose, y_to_z)), UpAxis::Z);
 }
 
 TEST(Preprocess, FaceForwardAtStartUndoesATurnOfTheBody) {

@@ -223,18 +223,23 @@ UpAxis detect_up_axis(const Clip& clip) {
     // and back) or level with it. `side` is (below - above) / pairs. Y stays
     // unless Z is clearly the up axis and Y clearly is not.
     const double margin = 0.02 * diameter;
-    double side_y = 0.0, side_z = 0.0;
+    double side_y = 0.0, side_z = 0.0, depth_y = 0.0, depth_z = 0.0;
     for (int t = 0; t < frames; ++t) {
       for (int f : feet) {
         const Vec3 down = position(t, 0) - position(t, f);
         side_y += (down.y() > margin) - (down.y() < -margin);
         side_z += (down.z() > margin) - (down.z() < -margin);
+        depth_y += down.y();
+        depth_z += down.z();
       }
     }
     const double pairs = static_cast<double>(frames) * feet.size();
     side_y /= pairs;
     side_z /= pairs;
     if (side_z > 0.8 && side_y < 0.3) return UpAxis::Z;
+    // A still body (a one-frame rig) can have every toe ahead of the root too: then the axis the feet hang far
+    // along is the up axis (a T-pose's legs: half its size down, its toes a tenth forward).
+    if (side_z > 0.8 && depth_z > 3.0 * std::abs(depth_y)) return UpAxis::Z;
     if (side_y > 0.5) return UpAxis::Y;
   }
   // Without named feet there is no reliable cue (jumps and flight move the

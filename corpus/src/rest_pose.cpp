@@ -7,6 +7,8 @@
 
 #include <Eigen/SVD>
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -188,6 +190,43 @@ std::vector<Quat> stance_frames(const Skeleton& bind, const std::vector<Vec3>& d
   return out;
 }
 
+namespace {
+
+// A rig the stance (and the motion) cannot do much with: one chain, or chains of no length.
+void warn_of_degenerate_bones(const Skeleton& skeleton, std::vector<std::string>& warnings) {
+  const int joints = skeleton.joint_count();
+  bool branches = false;
+  for (int j = 0; j < joints && !branches; ++j) branches = skeleton.children(j).size() >= 2;
+  if (!branches) {
+    warnings.push_back(joints == 1 ? "the skeleton is a single joint: the motion can only move and turn it"
+                                   : "the skeleton is one chain, no limbs: the motion can only bend it");
+  }
+  // A collapsed chain: a joint on its parent with nothing below it reaching out either (a dummy joint on its
+  // parent, like CMU's LHipJoint, has a leg below it and is fine).
+  std::vector<double> reach(joints, 0.0);  // length of the bones and end sites below each joint
+  for (const EndSite& site : skeleton.end_sites) reach[site.parent] += site.offset.norm();
+  for (int j = joints - 1; j > 0; --j) reach[skeleton.parents[j]] += reach[j] + skeleton.offsets[j].norm();
+  const double tiny = 1e-9 * std::max(skeleton.diameter(), 1e-9);
+  const auto collapsed = [&](int j) { return j > 0 && skeleton.offsets[j].norm() < tiny && reach[j] < tiny; };
+  std::vector<std::string> chains;
+  int lying = 0;
+  for (int j = 1; j < joints; ++j) {
+    if (!collapsed(j)) continue;
+    ++lying;
+    if (!collapsed(skeleton.parents[j])) chains.push_back(skeleton.names[j]);
+  }
+  if (!chains.empty()) {
+    std::string listed;
+    for (size_t i = 0; i < chains.size() && i < 4; ++i) listed += (i ? ", " : "") + chains[i];
+    if (chains.size() > 4) listed += fmt::format(" and {} more", chains.size() - 4);
+    warnings.push_back(fmt::format("{} joint(s) lie on their parents with nothing below them reaching out (the "
+                                   "chains from {}): they turn with their parents, with no stance of their own",
+                                   lying, listed));
+  }
+}
+
+}  // namespace
+
 PreparedClip take_stance(const PreparedClip& prepared, const StancePredictor& predictor) {
   const int joints = prepared.clip.skeleton.joint_count();
   if (static_cast<int>(prepared.normalization.rest_frames.size()) != joints) {
@@ -204,6 +243,7 @@ PreparedClip take_stance(const PreparedClip& prepared, const StancePredictor& pr
     out.normalization.rest_frames[j] = (stance[j] * bind[j] * prepared.normalization.rest_frames[j]).normalized();
   }
   out.report.changes.push_back("rest: the stance predicted from the skeleton in its frame-0 pose");
+  warn_of_degenerate_bones(out.clip.skeleton, out.report.warnings);
   return out;
 }
 

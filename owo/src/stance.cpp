@@ -22,6 +22,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 namespace nec::owo {
@@ -199,28 +200,51 @@ std::vector<StanceExample> stance_examples(const DatasetCache& cache, const Stan
     for (const std::string& pattern : options.held_out) held_out = held_out || matches_hold_out(rig, pattern);
     const Skeleton& skeleton = rig.skeleton;
     const int joints = skeleton.joint_count();
-    const PreparedClip truth = prepare_pose(skeleton, Motion::rest(skeleton, 1, cache.fps));
+    const PreparedClip file_truth = prepare_pose(skeleton, Motion::rest(skeleton, 1, cache.fps));
+    SplitMix64 lengths_rng(mix64(options.seed ^ mix64(s + 1) ^ 0x5eedULL));
     auto add = [&](const std::string& pose, const Motion& one_frame) {
-      const PreparedClip bind = prepare_pose(skeleton, one_frame);
+      if (held_out || options.length_jitter <= 0.0) {
+        const PreparedClip bind = prepare_pose(skeleton, one_frame);
+        out.push_back({rig.name, clip.dataset, pose, held_out, bind.clip.skeleton, file_truth.clip.skeleton,
+                       bind.canonical_names});
+        return;
+      }
+      // Other proportions, same tree and stance: every bone's length scaled on its own.
+      Skeleton scaled = skeleton;
+      for (Vec3& offset : scaled.offsets) {
+        offset *= lengths_rng.uniform(1.0 - options.length_jitter, 1.0 + options.length_jitter);
+      }
+      const PreparedClip bind = prepare_pose(scaled, one_frame);
+      const PreparedClip truth = prepare_pose(scaled, Motion::rest(scaled, 1, cache.fps));
       out.push_back({rig.name, clip.dataset, pose, held_out, bind.clip.skeleton, truth.clip.skeleton,
                      bind.canonical_names});
     };
+    SplitMix64 rng(mix64(options.seed ^ mix64(s + 1)));
+    auto turn_some = [&](Motion pose, double max_degrees) {
+      for (int j = 0; j < joints; ++j) {
+        if (rng.uniform() < options.turned_fraction) {
+          pose.rotation(0, j) = (random_turn(rng, max_degrees) * pose.rotation(0, j)).normalized();
+        }
+      }
+      return pose;
+    };
     // The file's own rest pose (every local rotation zero): canonical global rotations R^-1 F_j^-1.
+    std::optional<Motion> file_rest;
     if (static_cast<int>(clip.normalization.rest_frames.size()) == joints) {
       std::vector<Quat> globals(joints);
       for (int j = 0; j < joints; ++j) {
         globals[j] = (clip.normalization.rotation.conjugate() * clip.normalization.rest_frames[j].conjugate()).normalized();
       }
-      add("file rest", pose_from_globals(skeleton, globals, cache.fps));
+      file_rest = pose_from_globals(skeleton, globals, cache.fps);
+      add("file rest", *file_rest);
     }
     for (int k = 0; k < rig.poses.frame_count; ++k) add("frame", rig.poses.slice(k, k + 1));
-    SplitMix64 rng(mix64(options.seed ^ mix64(s + 1)));
     for (int k = 0; k < options.turned_per_rig; ++k) {
-      Motion turned = Motion::rest(skeleton, 1, cache.fps);
-      for (int j = 0; j < joints; ++j) {
-        if (rng.uniform() < options.turned_fraction) turned.rotation(0, j) = random_turn(rng, options.turned_degrees);
-      }
-      add("turned", turned);
+      add("turned", turn_some(Motion::rest(skeleton, 1, cache.fps), options.turned_degrees));
+    }
+    // Bind poses near the file's (an A-pose, bent knees, a rigger's own): the stance should not depend on which.
+    for (int k = 0; file_rest && k < options.rest_turned_per_rig; ++k) {
+      add("rest turned", turn_some(*file_rest, options.rest_turned_degrees));
     }
   }
   return out;

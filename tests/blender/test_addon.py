@@ -5,6 +5,8 @@
 
 Installs and enables the add-on from its zip, then, with the scene at 24 fps (nec's models run at 30):
   - Generate: two captions with their own lengths (2 s + 1 s) on an armature imported from a CMU BVH;
+  - a walk generated onto the same armature without an action (its bind pose: a T-pose) stands like a person:
+    upper arms within 45 degrees of hanging, thighs swinging (measured on the baked action in Blender);
   - Transfer: a CMU file onto the rig of huesitos.fbx (Blender's FBX importer: other bone rolls, an object
     transform), and the action of one armature onto another;
   - Search: a caption against DATABASE, two matches, each an action;
@@ -21,10 +23,13 @@ import sys
 
 import addon_utils
 import bpy
+from mathutils import Vector
 
 NEC, ZIP, DATABASE, MODELS = sys.argv[sys.argv.index("--") + 1:]
 TOLERANCE = 1e-3  # of the armature's size
 TURN_TOLERANCE = math.radians(0.05)
+ARMS_FROM_HANGING = 45.0  # degrees: a T-pose is 90, a walk's arms hang within about 20
+THIGH_SWING = 8.0  # degrees: a standing shuffle swings about 5, real walks 22-26 (issue 61: the GPT's walks 8-15)
 FPS = 24
 
 
@@ -164,6 +169,64 @@ def check_generate(person):
     check_action(person, made[0], path, "generate (CMU armature)")
 
 
+def limbs_of(armature, first, last):
+    """Upper arms' median angle from hanging and the thighs' forward swing (5th to 95th percentile of each thigh's
+    angle in the body's forward-down plane, the two sides' mean), in degrees, from the bones' world positions over
+    the frames first..last: what `nec info` calls its limbs line, measured here on the armature Blender plays."""
+    def head(name):
+        return armature.matrix_world @ armature.pose.bones[name].head
+
+    hanging, pitch = [], {"Left": [], "Right": []}
+    down = Vector((0.0, 0.0, -1.0))
+    for frame in range(first, last + 1):
+        bpy.context.scene.frame_set(frame)
+        for side in ("Left", "Right"):
+            arm = (head(side + "ForeArm") - head(side + "Arm")).normalized()
+            hanging.append(math.acos(max(-1.0, min(1.0, arm.dot(down)))))
+        across = head("LeftUpLeg") - head("RightUpLeg")
+        across.z = 0.0
+        forward = across.normalized().cross(-down)
+        for side in ("Left", "Right"):
+            thigh = (head(side + "Leg") - head(side + "UpLeg")).normalized()
+            pitch[side].append(math.atan2(thigh.dot(forward), thigh.dot(down)))
+
+    def quantile(values, q):
+        ordered = sorted(values)
+        return ordered[min(len(ordered) - 1, int(q * len(ordered)))]
+
+    arms = math.degrees(quantile(hanging, 0.5))
+    swing = sum(math.degrees(quantile(p, 0.95) - quantile(p, 0.05)) for p in pitch.values()) / 2
+    return arms, swing
+
+
+def check_tposed_walk():
+    """A CMU armature with no action stands in its bind pose, a T-pose: a walk generated onto it must bring the
+    arms down (before the stance network they stayed out, 84-87 degrees from hanging) and swing the thighs."""
+    person = import_cmu(os.path.join(MODELS, "BVH", "01_01.bvh"))
+    person.animation_data_clear()
+    for bone in person.pose.bones:
+        bone.matrix_basis.identity()
+    bpy.context.scene.frame_set(1)
+    settings = bpy.context.scene.nec
+    settings.captions.clear()
+    caption = settings.captions.add()
+    caption.text, caption.seconds = "a person walks forward", 4.0
+    settings.seed = 1
+    select(person)
+    made = run(bpy.ops.nec.generate, "generate onto a T-pose")
+    check(len(made) == 1, f"generate onto a T-pose: new actions {[a.name for a in made]}")
+    check_action(person, made[0], os.path.join(newest_work_folder(), "generated.bvh"), "generate onto a T-pose")
+    first, last = (int(f) for f in made[0].frame_range)
+    arms, swing = limbs_of(person, first, last)
+    print(f"T-posed armature, 'a person walks forward' (4 s, seed 1): upper arms {arms:.1f} degrees from hanging, "
+          f"thigh swing {swing:.1f} degrees; {os.path.join(newest_work_folder(), 'generated.bvh')}", flush=True)
+    check(arms <= ARMS_FROM_HANGING, f"generate onto a T-pose: the upper arms stay {arms:.1f} degrees from hanging "
+                                     f"(at most {ARMS_FROM_HANGING})")
+    check(swing >= THIGH_SWING, f"generate onto a T-pose: the thighs swing {swing:.1f} degrees (at least "
+                                f"{THIGH_SWING}): the body does not step")
+    bpy.data.objects.remove(person, do_unlink=True)
+
+
 def check_transfer(creature, person):
     settings = bpy.context.scene.nec
     settings.source_file = os.path.join(MODELS, "BVH", "Boxing_Toes.bvh")
@@ -250,6 +313,7 @@ def main():
     check_transfer(creature, person)
     check_search(person)
     check_failures(person)
+    check_tposed_walk()
     print("blender add-on: all checks passed", flush=True)
 
 

@@ -44,6 +44,7 @@ struct PreprocessReport {
   std::string file;
   std::vector<std::string> changes;  // one line per change, e.g. "merged dummy root 'joint_Root' into 'Hips'"
   std::string rejection;             // empty when accepted
+  std::vector<std::string> warnings; // what the result may not show as the user expects (commands print them)
 
   bool accepted() const { return rejection.empty(); }
 };

@@ -62,8 +62,9 @@ std::vector<Vec3> unit_bones(const Skeleton& skeleton);
 std::vector<Quat> stance_frames(const Skeleton& bind, const std::vector<Vec3>& directions);
 
 // A prepared clip (canonical rest, rest_frames set) put into its creature's stance as `predictor` reads it
-// from the clip's frame 0; the report says so. std::invalid_argument for a clip without canonical rest
-// frames or without frames.
+// from the clip's frame 0; the report says so, and warns of a skeleton without limbs (one chain) and of chains
+// of zero length (joints on their parents with nothing below them: they turn with their parents).
+// std::invalid_argument for a clip without canonical rest frames or without frames.
 PreparedClip take_stance(const PreparedClip& prepared, const StancePredictor& predictor);
 
 // Angles (degrees) between the bone directions of two skeletons of one tree, one per joint whose bone is

@@ -89,7 +89,7 @@ class NetworkStance : public StancePredictor {
 struct StanceExample {
   std::string rig;                           // the cache's skeleton name, e.g. "zoo-14"
   std::string dataset;                       // the dataset of its first clip, e.g. "cmu"
-  std::string pose;                          // "file rest", "frame", or "turned"
+  std::string pose;                          // "file rest", "frame", "turned" or "rest turned"
   bool held_out = false;                     // held out of training (by the cache or a hold-out pattern)
   Skeleton bind;                             // canonical at the bind pose: offsets are its world bone vectors
   Skeleton stance;                           // the same tree in the rig's canonical rest (the truth)
@@ -101,11 +101,15 @@ struct StanceExampleOptions {
   int turned_per_rig = 4;                 // its stance with joints turned at random
   double turned_fraction = 0.3;           // share of joints turned in those
   double turned_degrees = 75.0;           // the largest turn
+  int rest_turned_per_rig = 4;            // the file's rest pose with joints turned (other bind poses)
+  double rest_turned_degrees = 45.0;      // the largest turn in those
+  double length_jitter = 0.0;             // training examples' bone lengths scaled by 1 +- this, each on its own
   std::vector<std::string> held_out;      // hold-out patterns (owo/skeleton_set.h) besides the cache's own
   uint64_t seed = 1;
 };
 
-// Examples of every rig of `cache`: its file's rest pose, frames of its clips and turned stances.
+// Examples of every rig of `cache`: its file's rest pose, frames of its clips, turned stances and turned file rest
+// poses; with length_jitter, the rigs not held out in proportions of their own (the truth follows).
 std::vector<StanceExample> stance_examples(const DatasetCache& cache, const StanceExampleOptions& options);
 
 // Angles between predicted and true stance bone directions, pooled over joints.
