@@ -237,9 +237,10 @@ UpAxis detect_up_axis(const Clip& clip) {
     side_y /= pairs;
     side_z /= pairs;
     if (side_z > 0.8 && side_y < 0.3) return UpAxis::Z;
-    // A still body (a one-frame rig) can have every toe ahead of the root too: then the axis the feet hang far
-    // along is the up axis (a T-pose's legs: half its size down, its toes a tenth forward).
-    if (side_z > 0.8 && depth_z > 3.0 * std::abs(depth_y)) return UpAxis::Z;
+    // A rig given as one frame (its bind pose) can have every toe ahead of the root too: then the axis the feet
+    // hang far along is the up axis (a T-pose's legs: half its size down, its toes a tenth forward). Only there:
+    // in motion, a lying or sitting body can hang its feet along a horizontal axis.
+    if (clip.motion.frame_count == 1 && side_z > 0.8 && depth_z > 3.0 * std::abs(depth_y)) return UpAxis::Z;
     if (side_y > 0.5) return UpAxis::Y;
   }
   // Without named feet there is no reliable cue (jumps and flight move the
