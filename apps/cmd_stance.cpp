@@ -66,7 +66,9 @@ int run_train_stance(int argc, char** argv) {
   cli.option("--glove", "FILE", "", "word vectors for joint names (with --names)");
   cli.flag("--names", "read joint names (needs the word vectors)");
   cli.option("--seed", "N", "1", "initialization, examples and batches");
-  cli.option("--rest-turned", "N", "4", "the file's rest pose with joints turned at random, per rig");
+  cli.option("--passes", "N", "1", "times the network reads the rig, each time as the last pass turned it\n"
+                                  "(kept in the checkpoint: every command uses it)");
+  cli.option("--rest-turned", "N", "0", "the file's rest pose with joints turned at random, per rig");
   cli.option("--length-jitter", "X", "0", "training rigs' bone lengths scaled by 1 +- X, each bone on its own");
   cli.option("--threads", "N", "1", "torch threads (0: every core; one is fastest for these small batches)");
   cli.example("nec train stance --data out/default-models/cache --out runs/stance --hold-out '*/bvh/13_*'");
@@ -84,7 +86,9 @@ int run_train_stance(int argc, char** argv) {
   options.steps = cli.integer("--steps");
   options.batch_size = cli.integer("--batch");
   options.seed = examples_drawn.seed;
+  options.passes = cli.integer("--passes");
   if (options.steps < 1 || options.batch_size < 1) throw UsageError("--steps and --batch must be >= 1");
+  if (options.passes < 1) throw UsageError("--passes must be >= 1");
   std::optional<text::WordVectors> vectors;
   if (cli.is_set("--names")) {
     const std::string glove = cli.value("--glove");
@@ -101,6 +105,7 @@ int run_train_stance(int argc, char** argv) {
   std::fflush(stdout);
   owo::StanceCheckpointInfo info;
   info.training_step = options.steps;
+  info.passes = options.passes;
   for (const std::string& cache : caches) info.data += (info.data.empty() ? "" : ", ") + cache;
   info.data += fmt::format(": {} examples, {} held out", examples.size(), held_out.size());
   info.validation = nlohmann::json::array();
@@ -134,9 +139,14 @@ int run_eval_stance(int argc, char** argv) {
   cli.option("--hold-out", "PATTERNS", "", "also score these skeletons (comma-separated, as nec train stance's)");
   cli.flag("--all", "score every rig, not only those the caches hold out");
   cli.option("--json", "FILE", "", "also write the scores as JSON");
+  cli.option("--passes", "N", "", "times the network reads the rig (default: the checkpoint's)");
   cli.example("nec eval stance --model models/default/stance --data out/real-rigs/cache --all");
   if (!cli.parse(argc, argv)) return 0;
-  const owo::NetworkStance stance = owo::NetworkStance::open(cli.value("--model"), cli.value("--glove"));
+  owo::NetworkStance stance = owo::NetworkStance::open(cli.value("--model"), cli.value("--glove"));
+  if (!cli.value("--passes").empty()) {
+    if (cli.integer("--passes") < 1) throw UsageError("--passes must be >= 1");
+    stance.set_passes(cli.integer("--passes"));
+  }
   std::vector<owo::StanceExample> examples;
   for (owo::StanceExample& e : examples_of(cli.list("--data"), example_options(cli))) {
     if (cli.is_set("--all") || e.held_out) examples.push_back(std::move(e));

@@ -1,6 +1,7 @@
 // The stance network (owo/stance.h): examples drawn from a cache, a short training that learns a stance
 // better than keeping the bind pose on rigs it never saw, and checkpoints that load what was saved.
 #include "nec/corpus/preprocess.h"
+#include "nec/corpus/rest_pose.h"
 #include "nec/motion/error.h"
 #include "nec/owo/graph.h"
 #include "nec/owo/stance.h"
@@ -143,11 +144,12 @@ TEST(OwoStance, ShortTrainingBeatsKeepingTheBindPoseOnUnseenRigs) {
   owo::StanceTrainingOptions training;
   training.steps = 200;
   training.batch_size = 8;
+  training.passes = 2;  // from step 101 also the rigs as the network turned them
   owo::StanceNet net = owo::train_stance(examples, training, nullptr, {});
 
   const std::string dir = (fs::temp_directory_path() / ("nec_test_stance_" + std::to_string(::getpid()))).string();
   fs::remove_all(dir);
-  owo::save_stance_checkpoint(dir, *net, {training.steps, "test zoo", nlohmann::json::array()});
+  owo::save_stance_checkpoint(dir, *net, {training.steps, 1, "test zoo", nlohmann::json::array()});
   const owo::NetworkStance stance = owo::NetworkStance::open(dir, "");
   EXPECT_EQ(stance.info().training_step, 200);
 
@@ -171,6 +173,22 @@ TEST(OwoStance, ShortTrainingBeatsKeepingTheBindPoseOnUnseenRigs) {
   for (int j = 1; j < e.bind.joint_count(); ++j) {
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(loaded[j][k], trained[j][k].item<double>(), 1e-5);
   }
+
+  // Two passes: the rig turned onto the first pass's directions, read again; the count travels in the checkpoint.
+  owo::NetworkStance twice = owo::NetworkStance::open(dir, "");
+  twice.set_passes(2);
+  const Skeleton turned = reexpress_skeleton(e.bind, stance_frames(e.bind, loaded));
+  const std::vector<Vec3> by_hand = stance.bone_directions(turned, e.canonical_names);
+  const std::vector<Vec3> second = twice.bone_directions(e.bind, e.canonical_names);
+  double moved = 0.0;
+  for (int j = 1; j < e.bind.joint_count(); ++j) {
+    EXPECT_LT((second[j] - by_hand[j]).norm(), 1e-6) << j;
+    moved = std::max(moved, (second[j] - loaded[j]).norm());
+  }
+  EXPECT_GT(moved, 1e-4);  // the second pass changed something: it was run
+  EXPECT_THROW(twice.set_passes(0), std::invalid_argument);
+  owo::save_stance_checkpoint(dir, *net, {training.steps, 2, "test zoo", nlohmann::json::array()});
+  EXPECT_EQ(owo::NetworkStance::open(dir, "").info().passes, 2);
 
   // A damaged checkpoint is refused with the file named.
   std::ofstream(fs::path(dir) / "config.json") << "{\"format\": \"nec-stance\", \"version\": 99}";

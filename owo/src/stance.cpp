@@ -130,6 +130,7 @@ void save_stance_checkpoint(const std::string& dir, StanceNetImpl& net, const St
                          {"architecture", kArchitecture},
                          {"encoder", train::write_config(net.encoder->config())},
                          {"training_step", info.training_step},
+                         {"passes", info.passes},
                          {"data", info.data},
                          {"validation", info.validation},
                          {"tensors", kTensorFile}};
@@ -150,6 +151,8 @@ LoadedStance load_stance_checkpoint(const std::string& dir) {
   const OwoConfig encoder_config = train::read_config_object<OwoConfig>(root, "encoder", fields);
   LoadedStance loaded;
   reader.read(root, "training_step", "", loaded.info.training_step);
+  if (root.contains("passes")) reader.read(root, "passes", "", loaded.info.passes);
+  if (loaded.info.passes < 1) reader.fail("passes must be >= 1");
   reader.read(root, "data", "", loaded.info.data);
   if (root.contains("validation")) loaded.info.validation = root.at("validation");
   const std::string tensor_file = reader.entry(root, "tensors");
@@ -175,15 +178,26 @@ NetworkStance NetworkStance::open(const std::string& dir, const std::string& glo
   return NetworkStance(std::move(loaded.net), std::move(loaded.info), std::move(vectors));
 }
 
+void NetworkStance::set_passes(int64_t passes) {
+  if (passes < 1) throw std::invalid_argument("a stance network reads the rig at least once (passes >= 1)");
+  info_.passes = passes;
+}
+
 std::vector<Vec3> NetworkStance::bone_directions(const Skeleton& bind,
                                                  const std::vector<std::string>& canonical_names) const {
   const OwoConfig& config = net_->encoder->config();
-  const SkeletonGraph graph = graph_of(bind, canonical_names, config, vectors_ ? &*vectors_ : nullptr);
   c10::InferenceMode inference;
-  const at::Tensor directions = net_->forward(collate({graph}, config.name_dim))[0].to(torch::kFloat64).contiguous();
-  const auto a = directions.accessor<double, 2>();
+  // Each pass reads the rig as the last one turned it: directions are world directions, so the last pass's are
+  // the answer for `bind` too.
+  Skeleton pose = bind;
   std::vector<Vec3> out(bind.joint_count());
-  for (int j = 0; j < bind.joint_count(); ++j) out[j] = Vec3(a[j][0], a[j][1], a[j][2]);
+  for (int64_t pass = 0; pass < info_.passes; ++pass) {
+    if (pass > 0) pose = reexpress_skeleton(pose, stance_frames(pose, out));
+    const SkeletonGraph graph = graph_of(pose, canonical_names, config, vectors_ ? &*vectors_ : nullptr);
+    const at::Tensor directions = net_->forward(collate({graph}, config.name_dim))[0].to(torch::kFloat64).contiguous();
+    const auto a = directions.accessor<double, 2>();
+    for (int j = 0; j < bind.joint_count(); ++j) out[j] = Vec3(a[j][0], a[j][1], a[j][2]);
+  }
   return out;
 }
 
@@ -314,6 +328,7 @@ StanceNet train_stance(const std::vector<StanceExample>& examples, const StanceT
     at::Tensor weight;  // (J) 1 where both poses have the bone
   };
   std::vector<Prepared> data;
+  std::vector<const StanceExample*> trained;
   for (const StanceExample& example : examples) {
     if (example.held_out) continue;
     const std::vector<Vec3> bind = unit_bones(example.bind), truth = unit_bones(example.stance);
@@ -322,14 +337,41 @@ StanceNet train_stance(const std::vector<StanceExample>& examples, const StanceT
       if (!bind[j].isZero() && !truth[j].isZero()) weight[j] = 1.0f;
     }
     data.push_back({graph_of(example.bind, example.canonical_names, config, vectors), vec3_rows(truth), weight});
+    trained.push_back(&example);
   }
   if (data.empty()) throw std::invalid_argument("train_stance: no example is left for training");
   // Batches of similar joint counts (four buckets): the edge tensors grow with the largest rig.
-  std::vector<size_t> by_size(data.size());
-  for (size_t i = 0; i < by_size.size(); ++i) by_size[i] = i;
-  std::stable_sort(by_size.begin(), by_size.end(),
-                   [&](size_t a, size_t b) { return data[a].graph.joint_count < data[b].graph.joint_count; });
+  std::vector<size_t> by_size;
+  const auto sort_by_size = [&] {
+    by_size.resize(data.size());
+    for (size_t i = 0; i < by_size.size(); ++i) by_size[i] = i;
+    std::stable_sort(by_size.begin(), by_size.end(),
+                     [&](size_t a, size_t b) { return data[a].graph.joint_count < data[b].graph.joint_count; });
+  };
+  sort_by_size();
   constexpr size_t kBuckets = 4;
+  // With several passes the network reads rigs its own passes turned: from halfway, each training rig as the
+  // network then turns it, pass after pass, against the same truth (so a rig already in its stance stays).
+  const auto add_own_passes = [&] {
+    torch::NoGradGuard no_grad;
+    net->eval();
+    const size_t originals = trained.size();
+    for (size_t i = 0; i < originals; ++i) {
+      Skeleton pose = trained[i]->bind;
+      for (int64_t pass = 1; pass < options.passes; ++pass) {
+        const SkeletonGraph graph = graph_of(pose, trained[i]->canonical_names, config, vectors);
+        const at::Tensor directions = net->forward(collate({graph}, config.name_dim))[0].to(torch::kFloat64).contiguous();
+        const auto a = directions.accessor<double, 2>();
+        std::vector<Vec3> turned(pose.joint_count());
+        for (int j = 0; j < pose.joint_count(); ++j) turned[j] = Vec3(a[j][0], a[j][1], a[j][2]);
+        pose = reexpress_skeleton(pose, stance_frames(pose, turned));
+        data.push_back({graph_of(pose, trained[i]->canonical_names, config, vectors), data[i].target,
+                        data[i].weight});
+      }
+    }
+    net->train();
+    sort_by_size();
+  };
 
   train::OptimizerConfig optimizer_config;
   optimizer_config.learning_rate = options.learning_rate;
@@ -342,6 +384,7 @@ StanceNet train_stance(const std::vector<StanceExample>& examples, const StanceT
   double loss_sum = 0.0;
   int64_t loss_count = 0;
   for (int64_t step = 1; step <= options.steps; ++step) {
+    if (options.passes > 1 && step == options.steps / 2 + 1) add_own_passes();
     SplitMix64 rng(mix64(options.seed ^ mix64(static_cast<uint64_t>(step))));
     const size_t bucket = rng.below(kBuckets);
     const size_t begin = by_size.size() * bucket / kBuckets, end = std::max(begin + 1, by_size.size() * (bucket + 1) / kBuckets);

@@ -51,6 +51,7 @@ TORCH_MODULE(StanceNet);
 
 struct StanceCheckpointInfo {
   int64_t training_step = 0;
+  int64_t passes = 1;         // the network reads the stance it gave again this many times in all (at least 1)
   std::string data;           // what it was trained on, e.g. "out/default-models/cache: 412 rigs"
   nlohmann::json validation;  // the held-out errors at the end of training (StanceScore::to_json)
 };
@@ -73,9 +74,11 @@ class NetworkStance : public StancePredictor {
   // A network in memory (just trained), with the word vectors it reads names with (none for name_dim 0).
   NetworkStance(StanceNet net, StanceCheckpointInfo info, std::optional<text::WordVectors> vectors);
 
+  // info().passes times: the network's directions, the rig turned onto them, read again.
   std::vector<Vec3> bone_directions(const Skeleton& bind,
                                     const std::vector<std::string>& canonical_names) const override;
   const StanceCheckpointInfo& info() const { return info_; }
+  void set_passes(int64_t passes);  // std::invalid_argument below 1
   StanceNetImpl& net() const { return *net_; }
 
  private:
@@ -137,6 +140,7 @@ struct StanceTrainingOptions {
   double learning_rate = 2e-3;   // AdamW peak, warm-up 100 steps, cosine to a tenth
   double weight_decay = 0.01;
   int64_t name_dim = 0;          // 0: geometry and tree only; else the word vectors' width
+  int64_t passes = 1;            // > 1: from halfway, also the rigs as the network's own passes turned them
   int64_t log_every = 250;
   uint64_t seed = 1;
 };
