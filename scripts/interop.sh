@@ -9,7 +9,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 source scripts/lib.sh
-ensure_packages interop cmake ninja-build libeigen3-dev nlohmann-json3-dev libfmt-dev libgtest-dev libgmock-dev libassimp-dev blender nodejs npm assimp-testmodels
+ensure_packages interop cmake ninja-build libeigen3-dev nlohmann-json3-dev libfmt-dev libgtest-dev libgmock-dev libassimp-dev blender python3-numpy nodejs npm assimp-testmodels
 ensure_three
 
 cmake -S . -B build-interop -G Ninja -DCMAKE_BUILD_TYPE=Release -DNEC_BUILD_TESTS=ON >/dev/null

@@ -7,7 +7,7 @@
 #   tests/blender/check_addon.sh NEC_BINARY WORKDIR
 #
 # Exit status: 0 passed, 1 a check failed, 77 (CTest: skipped) when blender, assimp-testmodels or the default
-# models are missing (scripts/interop.sh installs Blender). Writes only inside WORKDIR.
+# models are missing (scripts/test.sh and scripts/interop.sh install Blender). Writes only inside WORKDIR.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)

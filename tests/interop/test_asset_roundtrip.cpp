@@ -3,7 +3,8 @@
 //   same world joint positions as the BVH;
 // - motion written by nec onto a copy of an asset (GLB) -> Blender's glTF
 //   importer: the mesh, its skin and the animation, bones where nec's FK puts them.
-// Needs blender (scripts/interop.sh installs it); skipped without.
+// Needs blender and numpy for its glTF importer (scripts/test.sh and scripts/interop.sh install them); skipped
+// without blender.
 #include "nec/assets/asset_reader.h"
 #include "nec/motion/bvh.h"
 #include "nec/motion/kinematics.h"
