@@ -51,6 +51,7 @@ class RunningStudio {
     return c;
   }
   const fs::path& work() const { return studio_->work_folder(); }
+  int port() const { return port_; }
 
  private:
   std::unique_ptr<studio::Studio> studio_;
@@ -62,6 +63,9 @@ json body_of(const httplib::Result& r) {
   if (!r) return json::object();
   return json::parse(r->body, nullptr, false);
 }
+
+// The HTTP status, or -1 when no answer came (a dropped connection fails one check, not the whole binary).
+int status_of(const httplib::Result& r) { return r ? r->status : -1; }
 
 httplib::Result upload(httplib::Client& c, const std::string& route, const std::string& field, const std::string& name,
                        const std::string& content, const std::string& rig = "") {
@@ -125,25 +129,25 @@ TEST(Studio, ServesThePageAndRefusesBadRequestsInWords) {
   ASSERT_TRUE(nowhere);
   EXPECT_EQ(nowhere->status, 404);
   EXPECT_EQ(body_of(nowhere)["error"], "no such route: GET /api/nothing");
-  EXPECT_EQ(c.Get("/api/jobs/j123")->status, 404);
-  EXPECT_EQ(c.Get("/api/jobs/../../etc/passwd")->status, 404);
+  EXPECT_EQ(status_of(c.Get("/api/jobs/j123")), 404);
+  EXPECT_EQ(status_of(c.Get("/api/jobs/../../etc/passwd")), 404);
 
   const auto post = [&](const json& body) { return c.Post("/api/generate", body.dump(), "application/json"); };
   const httplib::Result not_json = c.Post("/api/generate", "{caption", "application/json");
-  EXPECT_EQ(not_json->status, 400);
+  EXPECT_EQ(status_of(not_json), 400);
   EXPECT_EQ(body_of(not_json)["error"], "the request body is not a JSON object");
   const httplib::Result no_rig = post(generate_request("up999", 2, 0));
-  EXPECT_EQ(no_rig->status, 404);
+  EXPECT_EQ(status_of(no_rig), 404);
   EXPECT_NE(body_of(no_rig)["error"].get<std::string>().find("no rig 'up999'"), std::string::npos);
   json empty = generate_request("zoo-biped", 2, 0);
   empty["captions"][0]["text"] = "   ";
   EXPECT_EQ(body_of(post(empty))["error"], "caption 1 is empty: write what the motion shows");
-  EXPECT_EQ(post(generate_request("zoo-biped", 100, 0))->status, 400);
+  EXPECT_EQ(status_of(post(generate_request("zoo-biped", 100, 0))), 400);
   json model = generate_request("zoo-biped", 2, 0);
   model["model"] = "../gpt";
   EXPECT_EQ(body_of(post(model))["error"], "'model' must be gpt or diffusion");
   const httplib::Result search = c.Post("/api/search", R"({"text": "a jump"})", "application/json");
-  EXPECT_EQ(search->status, 400);
+  EXPECT_EQ(status_of(search), 400);
   EXPECT_NE(body_of(search)["error"].get<std::string>().find("--db"), std::string::npos);
 }
 
@@ -160,29 +164,48 @@ TEST(Studio, ReadsUploadsBeforeKeepingThemAndWritesOnlyInItsWorkFolder) {
     work = studio.work();
     httplib::Client c = studio.client();
 
-    const httplib::Result kept = upload(c, "/api/rigs", "file", "../../escape me.bvh", good);
-    ASSERT_EQ(kept->status, 200) << kept->body;
-    const json rig = body_of(kept);
-    EXPECT_EQ(rig["name"], "escape me.bvh");
-    EXPECT_GE(rig["joints"].get<int>(), 10);
-    EXPECT_EQ(body_of(c.Get("/api/rigs"))["rigs"].back()["id"], rig["id"]);
+    // Names that would leave the uploads' folder (work/uploads/upN/) and the work folder, were they joined as
+    // given: kept inside the upload's own folder, under a safe name.
+    const std::string up_and_out = "../../../../../../../../";
+    for (const std::string& name :
+         std::vector<std::string>{up_and_out + "escape me.bvh", up_and_out + "tmp/escape me.bvh", "/tmp/abs.bvh"}) {
+      const httplib::Result kept = upload(c, "/api/rigs", "file", name, good);
+      ASSERT_EQ(status_of(kept), 200) << name << ": " << (kept ? kept->body : "no answer");
+      const json rig = body_of(kept);
+      EXPECT_EQ(rig["name"], fs::path(name).filename().string());
+      EXPECT_GE(rig["joints"].get<int>(), 10);
+      EXPECT_EQ(body_of(c.Get("/api/rigs"))["rigs"].back()["id"], rig["id"]);
+      const fs::path stored = work / "uploads" / rig["id"].get<std::string>();
+      ASSERT_TRUE(fs::is_directory(stored)) << stored;
+      std::vector<fs::path> files;
+      for (const auto& entry : fs::directory_iterator(stored)) files.push_back(entry.path());
+      ASSERT_EQ(files.size(), 1u) << name;
+      EXPECT_EQ(read_file(files[0].string()), good) << name;
+      EXPECT_NE(files[0].filename().string().find(".bvh"), std::string::npos) << files[0];
+    }
+    EXPECT_FALSE(fs::exists("/escape me.bvh") || fs::exists("/tmp/escape me.bvh"));
+    const json rig = body_of(c.Get("/api/rigs"))["rigs"].back();
 
     // Malformed BVH: the message names the file as the user called it, the line and the problem.
     const std::string truncated = good.substr(0, good.find("MOTION")) + "MOTION\nFrames: 2\nFrame Time: 0.03\n0 0 0\n";
     const httplib::Result bad = upload(c, "/api/rigs", "file", "walk.bvh", truncated);
-    EXPECT_EQ(bad->status, 400);
+    EXPECT_EQ(status_of(bad), 400);
     const std::string said = body_of(bad)["error"];
     EXPECT_EQ(said.rfind("walk.bvh:", 0), 0u) << said;
     EXPECT_EQ(said.find(work.string()), std::string::npos) << said;
     std::mt19937 rng(5);
     std::string noise(4000, '\0');
     for (char& b : noise) b = static_cast<char>(rng() & 0xff);
-    EXPECT_EQ(upload(c, "/api/rigs", "file", "noise.bvh", noise)->status, 400);
-    EXPECT_EQ(upload(c, "/api/rigs", "file", "noise.fbx", noise)->status, 400);
+    EXPECT_EQ(status_of(upload(c, "/api/rigs", "file", "noise.bvh", noise)), 400);
+    EXPECT_EQ(status_of(upload(c, "/api/rigs", "file", "noise.fbx", noise)), 400);
     const httplib::Result program = upload(c, "/api/rigs", "file", "rig.exe", good);
-    EXPECT_EQ(program->status, 400);
+    EXPECT_EQ(status_of(program), 400);
     EXPECT_NE(body_of(program)["error"].get<std::string>().find("not a file nec reads"), std::string::npos);
-    EXPECT_EQ(upload(c, "/api/rigs", "file", "empty.bvh", "")->status, 400);
+    EXPECT_EQ(status_of(upload(c, "/api/rigs", "file", "empty.bvh", "")), 400);
+    // A glTF's buffers are files beside it, and an upload is one file.
+    const httplib::Result gltf = upload(c, "/api/rigs", "file", "rig.gltf", "{}");
+    EXPECT_EQ(status_of(gltf), 400);
+    EXPECT_NE(body_of(gltf).value("error", "").find("not a file nec reads"), std::string::npos) << body_of(gltf);
     const httplib::Result large = upload(c, "/api/rigs", "file", "large.bvh", std::string(3 << 19, 'x'));
     ASSERT_TRUE(large);
     EXPECT_EQ(large->status, 413);
@@ -195,6 +218,59 @@ TEST(Studio, ReadsUploadsBeforeKeepingThemAndWritesOnlyInItsWorkFolder) {
   }
   EXPECT_FALSE(fs::exists(work)) << "the work folder is removed when the studio stops";
   EXPECT_TRUE(fs::is_empty(parent.path()));
+}
+
+TEST(Studio, RefusesASecondStudioOnItsPortAndForgetsTheOldestUploadsAndJobs) {
+  TempDir dir;
+  const std::string good = read_file(zoo_bvh(dir));
+  studio::StudioOptions options;
+  options.work_parent = dir.path().string();
+  options.max_uploads = 2;
+  options.keep_jobs = 2;
+  RunningStudio studio(options);
+
+  studio::StudioOptions same_port = options;
+  same_port.nec_binary = std::string(NEC_BINARY_DIR) + "/apps/nec";
+  same_port.port = studio.port();
+  studio::Studio second(same_port);
+  try {
+    second.bind();
+    ADD_FAILURE() << "a second studio listened on port " << studio.port();
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("cannot listen on 127.0.0.1:" + std::to_string(studio.port())),
+              std::string::npos) << error.what();
+  }
+
+  httplib::Client c = studio.client();
+  std::vector<std::string> uploaded;
+  for (int i = 0; i < 3; ++i) {
+    const json rig = body_of(upload(c, "/api/rigs", "file", "rig" + std::to_string(i) + ".bvh", good));
+    ASSERT_TRUE(rig.contains("id")) << rig.dump();
+    uploaded.push_back(rig["id"]);
+  }
+  std::vector<std::string> listed;
+  const json rigs = body_of(c.Get("/api/rigs"));
+  for (const json& rig : rigs["rigs"]) {
+    if (rig["source"] == "upload") listed.push_back(rig["id"]);
+  }
+  EXPECT_EQ(listed, std::vector<std::string>(uploaded.begin() + 1, uploaded.end()));  // the oldest is forgotten
+  EXPECT_FALSE(fs::exists(studio.work() / "uploads" / uploaded[0]));
+  EXPECT_TRUE(fs::exists(studio.work() / "uploads" / uploaded[2]));
+  EXPECT_EQ(status_of(c.Post("/api/generate", generate_request(uploaded[0], 1, 0).dump(), "application/json")), 404);
+
+  // Three finished jobs (refused captions end fast): the first one's status and files are gone.
+  std::vector<std::string> jobs;
+  for (int i = 0; i < 3; ++i) {
+    json bad = generate_request(uploaded[2], 1, i);
+    bad["captions"][0]["text"] = "?!";
+    const json ended = wait_for(c, body_of(c.Post("/api/generate", bad.dump(), "application/json"))["job"]);
+    ASSERT_EQ(ended.value("state", ""), "failed") << ended.dump();
+    jobs.push_back(ended["job"]);
+  }
+  EXPECT_EQ(status_of(c.Get(("/api/jobs/" + jobs[0]).c_str())), 404);
+  EXPECT_EQ(status_of(c.Get(("/api/jobs/" + jobs[1]).c_str())), 200);
+  EXPECT_EQ(status_of(c.Get(("/api/jobs/" + jobs[2]).c_str())), 200);
+  EXPECT_EQ(std::distance(fs::directory_iterator(studio.work() / "jobs"), fs::directory_iterator()), 2);
 }
 
 TEST(Studio, GeneratesTransfersAndSearchesIntoFilesNecReadsBack) {
@@ -214,32 +290,73 @@ TEST(Studio, GeneratesTransfersAndSearchesIntoFilesNecReadsBack) {
   json request = generate_request(person["id"], 2, 4);
   request["captions"].push_back({{"text", "a person jumps"}, {"seconds", 1}});
   const httplib::Result accepted = c.Post("/api/generate", request.dump(), "application/json");
-  ASSERT_EQ(accepted->status, 202) << accepted->body;
+  ASSERT_EQ(status_of(accepted), 202) << (accepted ? accepted->body : "no answer");
   const json done = wait_for(c, body_of(accepted)["job"]);
   ASSERT_EQ(done["state"], "done") << done.dump();
   EXPECT_EQ(done["files"], json({"generated.bvh", "generated.txt"}));
   const std::string job = done["job"];
   const httplib::Result file = c.Get(("/api/jobs/" + job + "/files/generated.bvh").c_str());
-  ASSERT_EQ(file->status, 200);
+  ASSERT_EQ(status_of(file), 200);
   const Clip made = parse_bvh(file->body, "generated.bvh");
   EXPECT_EQ(made.skeleton.names, rig.skeleton.names);
   EXPECT_NEAR(made.motion.frame_count / made.motion.fps, 3.0, 0.2);
-  EXPECT_EQ(c.Get(("/api/jobs/" + job + "/files/generated.txt").c_str())->body, "a person walks forward\na person jumps\n");
-  EXPECT_EQ(c.Get(("/api/jobs/" + job + "/files/log.txt").c_str())->status, 404);  // only the results
+  const httplib::Result captions = c.Get(("/api/jobs/" + job + "/files/generated.txt").c_str());
+  ASSERT_TRUE(captions);
+  EXPECT_EQ(captions->body, "a person walks forward\na person jumps\n");
+  EXPECT_EQ(status_of(c.Get(("/api/jobs/" + job + "/files/log.txt").c_str())), 404);  // only the results
+  // Names that would leave the job's results (its out/ folder, its folder, the uploads beside the jobs).
+  for (const std::string& name : std::vector<std::string>{"..", "../log.txt", "../../../uploads/" + person["id"].get<std::string>() + "/person.bvh",
+                                  "..%2Flog.txt", "%2E%2E%2F%2E%2E%2F%2E%2E%2Fuploads%2F" + person["id"].get<std::string>() +
+                                  "%2Fperson.bvh", "....//log.txt"}) {
+    const httplib::Result escaped = c.Get(("/api/jobs/" + job + "/files/" + name).c_str());
+    EXPECT_EQ(status_of(escaped), 404) << name << ": " << (escaped ? escaped->body : "no answer");
+    if (escaped) EXPECT_EQ(escaped->body.find("HIERARCHY"), std::string::npos) << name;
+  }
   const httplib::Result page = c.Get(("/api/jobs/" + job + "/view.html").c_str());
-  ASSERT_EQ(page->status, 200);
+  ASSERT_EQ(status_of(page), 200);
   EXPECT_NE(page->body.find("nec-clips"), std::string::npos);
 
-  const json moved = wait_for(c, body_of(upload(c, "/api/transfer", "source", "walk.bvh", read_file(source), "zoo-quadruped"))["job"]);
+  // Onto another uploaded rig (the zoo's second person): its joint names, channels' count and rest offsets.
+  const std::string other_path = testing::bvh_files_under(dir / "zoo").back();
+  const Clip other = read_bvh(other_path);
+  bool differs = other.skeleton.joint_count() != rig.skeleton.joint_count();
+  for (int j = 1; !differs && j < rig.skeleton.joint_count(); ++j) {
+    differs = (other.skeleton.offsets[j] - rig.skeleton.offsets[j]).norm() > 1e-3;
+  }
+  ASSERT_TRUE(differs) << "the second person's rig is the first's: the check below would not see which one";
+  const json target = body_of(upload(c, "/api/rigs", "file", "other.bvh", read_file(other_path)));
+  const json moved = wait_for(c, body_of(upload(c, "/api/transfer", "source", "walk.bvh", read_file(source),
+                                                target["id"]))["job"]);
   ASSERT_EQ(moved["state"], "done") << moved.dump();
-  const Clip dog = parse_bvh(c.Get(("/api/jobs/" + moved["job"].get<std::string>() + "/files/transferred.bvh").c_str())->body, "t");
-  EXPECT_GE(dog.motion.frame_count, 50);
+  const httplib::Result transferred =
+      c.Get(("/api/jobs/" + moved["job"].get<std::string>() + "/files/transferred.bvh").c_str());
+  ASSERT_EQ(status_of(transferred), 200);
+  const Clip onto = parse_bvh(transferred->body, "transferred.bvh");
+  EXPECT_EQ(onto.skeleton.names, other.skeleton.names);
+  ASSERT_EQ(onto.skeleton.joint_count(), other.skeleton.joint_count());
+  for (int j = 1; j < onto.skeleton.joint_count(); ++j) {
+    EXPECT_LT((onto.skeleton.offsets[j] - other.skeleton.offsets[j]).norm(), 1e-4) << other.skeleton.names[j];
+  }
+  EXPECT_NEAR(onto.motion.frame_count / onto.motion.fps, rig.motion.frame_count / rig.motion.fps, 0.1);
 
   const httplib::Result searched = c.Post("/api/search", R"({"text": "a person walks", "k": 2})", "application/json");
-  ASSERT_EQ(searched->status, 202) << searched->body;
+  ASSERT_EQ(status_of(searched), 202) << (searched ? searched->body : "no answer");
   const json found = wait_for(c, body_of(searched)["job"]);
   ASSERT_EQ(found["state"], "done") << found.dump();
   EXPECT_EQ(found["files"], json({"1.bvh", "1.txt", "2.bvh", "2.txt"}));
+  // Each match is a clip of the database on its own rig: one of the zoo files' joint names, a caption of it.
+  std::vector<std::vector<std::string>> rigs_in_db;
+  for (const std::string& file : testing::bvh_files_under(dir / "zoo/seen")) rigs_in_db.push_back(read_bvh(file).skeleton.names);
+  for (const std::string& match : {"1", "2"}) {
+    const httplib::Result bvh = c.Get(("/api/jobs/" + found["job"].get<std::string>() + "/files/" + match + ".bvh").c_str());
+    ASSERT_EQ(status_of(bvh), 200) << match;
+    const Clip clip = parse_bvh(bvh->body, match + ".bvh");
+    EXPECT_NE(std::find(rigs_in_db.begin(), rigs_in_db.end(), clip.skeleton.names), rigs_in_db.end()) << match;
+    EXPECT_GT(clip.motion.frame_count, 10) << match;
+    const httplib::Result caption = c.Get(("/api/jobs/" + found["job"].get<std::string>() + "/files/" + match + ".txt").c_str());
+    ASSERT_EQ(status_of(caption), 200) << match;
+    EXPECT_GT(caption->body.size(), 3u) << match;
+  }
 
   // A rigged asset: its copy with the motion (GLB) is offered too, and the page shows its skinned mesh.
   const std::string wuson = "/usr/share/assimp/models/X/Testwuson.X";
@@ -274,6 +391,7 @@ TEST(Studio, RefusesWorkBeyondItsQueueAndFinishesFiftyConcurrentGenerates) {
     int accepted = 0, busy = 0;
     for (int i = 0; i < 8; ++i) {
       const httplib::Result r = c.Post("/api/generate", generate_request("zoo-biped", 1, i).dump(), "application/json");
+      ASSERT_TRUE(r) << "request " << i << ": no answer";
       if (r->status == 202) ++accepted;
       if (r->status == 503) {
         ++busy;

@@ -113,11 +113,12 @@ def check_action(armature, action, path, label):
     source = reference(path)
     size = size_of(armature)
     worst, where, worst_turn, where_turn = 0.0, None, 0.0, None
+    missing = [b.name for b in armature.pose.bones if b.name not in source.pose.bones]
+    check(not missing, f"{label}: nec's file has no joint for the bones {missing[:5]} ({len(missing)} in all): "
+                       f"they could not be compared")
     for frame in sorted({1, int(last) // 2, int(last)}):
         bpy.context.scene.frame_set(frame)
         for bone in armature.pose.bones:
-            if bone.name not in source.pose.bones:
-                continue
             joint = source.pose.bones[bone.name]
             # the rig went out in its armature space, so nec's joints are in that space: place them in the world
             error = (armature.matrix_world @ bone.head - armature.matrix_world @ joint.head).length / size

@@ -22,6 +22,12 @@ command -v node >/dev/null || skip "node is not installed"
 rm -rf "$work" && mkdir -p "$work/studio"
 "$nec" zoo --out "$work/zoo" --plans biped --creatures 1 --clips-per-creature 1 --seconds 1 --seed 2 --quiet
 rig=$(find "$work/zoo" -name '*.bvh' | head -n 1)
+# The studio's page plays motion with the three.js nec embeds when it is built: without it there is nothing to see.
+if ! "$nec" view "$rig" -o "$work/three_probe.html" > "$work/three_probe.log" 2>&1; then
+  grep -q "built without three.js" "$work/three_probe.log" && skip "this nec was built without three.js"
+  cat "$work/three_probe.log" >&2
+  exit 1
+fi
 "$nec" serve --port 0 --work "$work/studio" --threads 1 > "$work/serve.log" 2>&1 &
 server=$!
 trap 'kill $server 2>/dev/null || true' EXIT
