@@ -169,16 +169,25 @@ TEST(TatLoss, PaddingIsExcluded) {
   EXPECT_EQ(l.position, 0.0);
   EXPECT_EQ(l.velocity, 0.0);
 
-  // Gradients reach real entries only.
-  at::Tensor q = f.batch.features.clone();
-  q.add_(0.1 * torch::randn_like(q));
-  q.requires_grad_(true);
-  loss_of(q, f.batch).total.backward();
-  const at::Tensor grad = q.grad();
-  EXPECT_GT(grad.abs().sum().item<double>(), 0.0);
-  EXPECT_EQ(grad[0].narrow(1, 6, 4).abs().sum().item<double>(), 0.0);
-  EXPECT_EQ(grad[1].narrow(0, 9, 3).abs().sum().item<double>(), 0.0);
-  EXPECT_TRUE(torch::isfinite(grad).all().item<bool>());
+  // Gradients reach real entries only: with the default weights, and with the positions' and the velocities'
+  // terms alone (their FK's backward runs only when they weigh something).
+  LossWeights positions_only, velocities_only;
+  positions_only.rotation = positions_only.root = positions_only.vertical = 0.0;
+  velocities_only = positions_only;
+  positions_only.position = 1.0;
+  velocities_only.velocity = 1.0;
+  for (const auto& [name, weights] : {std::pair<std::string, LossWeights>{"defaults", LossWeights{}},
+                                      {"positions", positions_only}, {"velocities", velocities_only}}) {
+    at::Tensor q = f.batch.features.clone();
+    q.add_(0.1 * torch::randn_like(q));
+    q.requires_grad_(true);
+    tat::reconstruction_loss(q, f.batch, torch::zeros({}), weights).total.backward();
+    const at::Tensor grad = q.grad();
+    EXPECT_GT(grad.abs().sum().item<double>(), 0.0) << name;
+    EXPECT_EQ(grad[0].narrow(1, 6, 4).abs().sum().item<double>(), 0.0) << name;
+    EXPECT_EQ(grad[1].narrow(0, 9, 3).abs().sum().item<double>(), 0.0) << name;
+    EXPECT_TRUE(torch::isfinite(grad).all().item<bool>()) << name;
+  }
 }
 
 // The rotations' term is the mean squared error over the 6 channels of every real joint and frame: an error
