@@ -53,8 +53,8 @@ int run_train_stance(int argc, char** argv) {
                   "Train the stance network: a rig given without motion (one frame in any bind pose) -> where each\n"
                   "bone points in its creature's typical stance (the mean pose of all its clips, the canonical rest\n"
                   "the models learned motion around; docs/features.md#stance). Every rig of the caches is shown in\n"
-                  "its file's own rest pose, in frames of its clips and in its stance and its rest pose with joints\n"
-                  "turned at random.\n"
+                  "its file's own rest pose, in frames of its clips and in its stance with joints turned at random\n"
+                  "(with --rest-turned, its rest pose so too).\n"
                   "Rigs the caches hold out, and those --hold-out patterns name, are not trained on: the held-out\n"
                   "errors (degrees between predicted and true bone directions) are printed and kept in the checkpoint.");
   cli.option("--data", "CACHES", "", "dataset caches from `nec prepare`, comma-separated", true);
