@@ -28,6 +28,7 @@ if ! "$nec" view "$rig" -o "$work/three_probe.html" > "$work/three_probe.log" 2>
   cat "$work/three_probe.log" >&2
   exit 1
 fi
+: > "$work/serve.log"  # there before the loop below reads it: the background job opens it when it gets to run
 "$nec" serve --port 0 --work "$work/studio" --threads 1 > "$work/serve.log" 2>&1 &
 server=$!
 trap 'kill $server 2>/dev/null || true' EXIT
