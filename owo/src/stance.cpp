@@ -79,6 +79,18 @@ SkeletonGraph graph_of(const Skeleton& bind, const std::vector<std::string>& nam
   return make_skeleton_graph(bind, embedded, config.graph);
 }
 
+// The network's stance directions (J) for one rig; the caller holds inference or no-grad mode.
+std::vector<Vec3> read_directions(StanceNetImpl& net, const Skeleton& pose, const std::vector<std::string>& names,
+                                  const text::WordVectors* vectors) {
+  const OwoConfig& config = net.encoder->config();
+  const SkeletonGraph graph = graph_of(pose, names, config, vectors);
+  const at::Tensor directions = net.forward(collate({graph}, config.name_dim))[0].to(torch::kFloat64).contiguous();
+  const auto a = directions.accessor<double, 2>();
+  std::vector<Vec3> out(pose.joint_count());
+  for (int j = 0; j < pose.joint_count(); ++j) out[j] = Vec3(a[j][0], a[j][1], a[j][2]);
+  return out;
+}
+
 // The value below which a share `q` of the total weight lies.
 double weighted_percentile(const std::vector<double>& values, const std::vector<double>& weights, double q) {
   std::vector<size_t> order(values.size());
@@ -185,18 +197,15 @@ void NetworkStance::set_passes(int64_t passes) {
 
 std::vector<Vec3> NetworkStance::bone_directions(const Skeleton& bind,
                                                  const std::vector<std::string>& canonical_names) const {
-  const OwoConfig& config = net_->encoder->config();
   c10::InferenceMode inference;
+  const text::WordVectors* vectors = vectors_ ? &*vectors_ : nullptr;
   // Each pass reads the rig as the last one turned it: directions are world directions, so the last pass's are
   // the answer for `bind` too.
+  std::vector<Vec3> out = read_directions(*net_, bind, canonical_names, vectors);
   Skeleton pose = bind;
-  std::vector<Vec3> out(bind.joint_count());
-  for (int64_t pass = 0; pass < info_.passes; ++pass) {
-    if (pass > 0) pose = reexpress_skeleton(pose, stance_frames(pose, out));
-    const SkeletonGraph graph = graph_of(pose, canonical_names, config, vectors_ ? &*vectors_ : nullptr);
-    const at::Tensor directions = net_->forward(collate({graph}, config.name_dim))[0].to(torch::kFloat64).contiguous();
-    const auto a = directions.accessor<double, 2>();
-    for (int j = 0; j < bind.joint_count(); ++j) out[j] = Vec3(a[j][0], a[j][1], a[j][2]);
+  for (int64_t pass = 1; pass < info_.passes; ++pass) {
+    pose = reexpress_skeleton(pose, stance_frames(pose, out));
+    out = read_directions(*net_, pose, canonical_names, vectors);
   }
   return out;
 }
@@ -359,12 +368,8 @@ StanceNet train_stance(const std::vector<StanceExample>& examples, const StanceT
     for (size_t i = 0; i < originals; ++i) {
       Skeleton pose = trained[i]->bind;
       for (int64_t pass = 1; pass < options.passes; ++pass) {
-        const SkeletonGraph graph = graph_of(pose, trained[i]->canonical_names, config, vectors);
-        const at::Tensor directions = net->forward(collate({graph}, config.name_dim))[0].to(torch::kFloat64).contiguous();
-        const auto a = directions.accessor<double, 2>();
-        std::vector<Vec3> turned(pose.joint_count());
-        for (int j = 0; j < pose.joint_count(); ++j) turned[j] = Vec3(a[j][0], a[j][1], a[j][2]);
-        pose = reexpress_skeleton(pose, stance_frames(pose, turned));
+        pose = reexpress_skeleton(pose, stance_frames(pose, read_directions(*net, pose, trained[i]->canonical_names,
+                                                                            vectors)));
         data.push_back({graph_of(pose, trained[i]->canonical_names, config, vectors), data[i].target,
                         data[i].weight});
       }
