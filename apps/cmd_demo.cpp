@@ -127,7 +127,7 @@ std::vector<std::pair<std::string, std::string>> run_model_demo(const fs::path& 
     if (diffusion_session && i < 3) {
       const PreparedClip on_skeleton =
           tat::prepare_target(skeleton_path, diffusion_session->fps(), UpAxis::Auto, stance);
-      diffusion::DiffusionSamplingOptions options;  // 50 steps, guidance 2.5
+      diffusion::DiffusionSamplingOptions options;  // generation's defaults
       options.seed = i;
       const Features motion = diffusion::generate_motions(*diffusion_session, on_skeleton,
                                                           {{caption, std::lround(4.0 * diffusion_session->fps())}}, 1, options)

@@ -78,6 +78,18 @@ void refuse_options(const CommandLine& cli, const std::vector<std::pair<std::str
   }
 }
 
+diffusion::DiffusionSolver parse_solver(const std::string& name) {
+  if (name == "ddim") return diffusion::DiffusionSolver::kDdim;
+  if (name == "dpm++") return diffusion::DiffusionSolver::kDpmSolver;
+  throw UsageError("--solver must be dpm++ or ddim, got " + name);
+}
+
+diffusion::TimestepSpacing parse_spacing(const std::string& name) {
+  if (name == "quadratic") return diffusion::TimestepSpacing::kQuadratic;
+  if (name == "uniform") return diffusion::TimestepSpacing::kUniform;
+  throw UsageError("--spacing must be quadratic or uniform, got " + name);
+}
+
 }  // namespace
 
 int run_generate(int argc, char** argv) {
@@ -102,7 +114,9 @@ int run_generate(int argc, char** argv) {
   cli.option("--temperature", "T", "1", "GPT: divides the logits (lower: safer, less varied)");
   cli.option("--top-k", "K", "0", "GPT: keep the K most likely codes (0: all)");
   cli.option("--top-p", "P", "0.95", "GPT: keep the fewest codes holding probability P (1: all)");
-  cli.option("--steps", "N", "50", "diffusion: denoising steps (DDIM, of the model's 1000)");
+  cli.option("--steps", "N", "10", "diffusion: denoising steps (of the model's 1000)");
+  cli.option("--solver", "NAME", "dpm++", "diffusion: dpm++ (DPM-Solver++, second order) or ddim");
+  cli.option("--spacing", "NAME", "quadratic", "diffusion: the steps' timesteps, quadratic (more at low noise) or uniform");
   cli.option("--view", "PAGE.html", "", "also write a page that plays the motions");
   cli.option("--up", "AXIS", "auto", "up axis of the skeleton file: auto, y or z");
   cli.flag("--free-height", "keep the height as generated (default: settle the body onto the floor)");
@@ -135,10 +149,12 @@ int run_generate(int argc, char** argv) {
   if (is_diffusion) {
     refuse_options(cli, {{"--temperature", "1"}, {"--top-k", "0"}, {"--top-p", "0.95"}}, "GPT");
     diffusion_sampling.steps = cli.integer("--steps");
+    diffusion_sampling.solver = parse_solver(cli.value("--solver"));
+    diffusion_sampling.spacing = parse_spacing(cli.value("--spacing"));
     diffusion_sampling.guidance = cli.number("--guidance");
     diffusion_sampling.seed = seed;
   } else {
-    refuse_options(cli, {{"--steps", "50"}}, "diffusion");
+    refuse_options(cli, {{"--steps", "10"}, {"--solver", "dpm++"}, {"--spacing", "quadratic"}}, "diffusion");
     gpt_sampling.temperature = cli.number("--temperature");
     gpt_sampling.top_k = cli.integer("--top-k");
     gpt_sampling.top_p = cli.number("--top-p");

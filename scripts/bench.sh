@@ -350,8 +350,10 @@ bench_process() {
     --run "a program that only loads LibTorch (the floor)" "$build/benchmarks/torch_floor" \
     --run "nec generate, default GPT, 4-s motion, 31-joint CMU rig (goal <= 0.5 s)" \
     "$nec generate 'a person waves' --skeleton $rig --seconds 4 -o $data/gpt.bvh --force" \
-    --run "nec generate, default diffusion model, 50 steps, the same (goal <= 2 s)" \
+    --run "nec generate, default diffusion model (10 DPM-Solver++ steps), the same (goal <= 2 s)" \
     "$nec generate 'a person waves' --skeleton $rig --seconds 4 --model models/default/diffusion -o $data/diffusion.bvh --force" \
+    --run "nec generate, default diffusion model, 50 uniform DDIM steps (the sampling before 2026-12-07)" \
+    "$nec generate 'a person waves' --skeleton $rig --seconds 4 --model models/default/diffusion --solver ddim --steps 50 --spacing uniform -o $data/diffusion50.bvh --force" \
     --run "nec retrieve, 48-clip index built (goal <= 0.5 s)" "$nec retrieve 'a dog walks forward' --db $data/cache"
 }
 

@@ -7,6 +7,7 @@
 # SPLIT: test (default) or val; SAMPLES per caption (default 1; 2 or more also give Multimodality);
 # CLIPS: at most this many clips of each dataset, evenly spaced in the manifest's order (default: all).
 # NEC_THREADS: threads of each `nec generate` (default 2).
+# NEC_GENERATE_OPTIONS: more options for every `nec generate`, e.g. "--solver dpm++ --steps 10".
 # NEC_TARGET: the skeleton each motion is generated onto, never one that hands the model the clip's own pose:
 #   rest (default): a one-frame copy of the clip's file in its rest pose (scripts/rest_pose_bvh.py), as a user
 #     exports a rig (a T-pose for the zoo and CMU), which takes its creature's stance (models/default/stance);
@@ -83,7 +84,7 @@ while IFS=$'\t' read -r dataset source seconds caption own; do
     mean) rest_option=(--rest-from-motion) ;;
   esac
   "$nec" generate "$caption" --skeleton "$skeleton" --model "$model" --seconds "$seconds" --samples "$samples" \
-    --seed "$count" -o "$folder/$name.bvh" --force --threads "$threads" "${rest_option[@]}" > /dev/null
+    --seed "$count" -o "$folder/$name.bvh" --force --threads "$threads" "${rest_option[@]}" ${NEC_GENERATE_OPTIONS:-} > /dev/null
   if [ "$caption" != "$own" ]; then
     for sidecar in "$folder/$name".txt "$folder/$name"_*.txt; do
       [ -f "$sidecar" ] && printf '%s\n' "$own" > "$sidecar"

@@ -105,13 +105,70 @@ TEST(DiffusionSchedule, CosineScheduleAndDdimStepsOnKnownNumbers) {
   EXPECT_LT(max_difference(earlier, std::sqrt(b) * x0[1] + std::sqrt(1 - b) * noise[1]), 1e-4);
   EXPECT_TRUE(schedule.ddim_step(x_t[1], x0[1], 700, -1).equal(x0[1]));
 
-  EXPECT_EQ(schedule.sampling_step(0, 50), std::make_pair(int64_t{999}, int64_t{979}));
-  EXPECT_EQ(schedule.sampling_step(49, 50), std::make_pair(int64_t{0}, int64_t{-1}));
-  EXPECT_EQ(schedule.sampling_step(0, 1), std::make_pair(int64_t{999}, int64_t{-1}));
-  EXPECT_THROW(schedule.sampling_step(0, 1001), std::invalid_argument);
+  using diffusion::TimestepSpacing;
+  const std::vector<int64_t> uniform = schedule.sampling_timesteps(50, TimestepSpacing::kUniform);
+  EXPECT_EQ(uniform.front(), 999);
+  EXPECT_EQ(uniform[1], 979);
+  EXPECT_EQ(uniform.back(), 0);
+  EXPECT_EQ(schedule.sampling_timesteps(10, TimestepSpacing::kQuadratic),
+            (std::vector<int64_t>{999, 789, 604, 444, 308, 197, 111, 49, 12, 0}));
+  EXPECT_EQ(schedule.sampling_timesteps(1, TimestepSpacing::kQuadratic), std::vector<int64_t>{999});
+  // Any count: from 999 down to 0, never a timestep twice (rounding would repeat the quadratic's low ones).
+  for (const TimestepSpacing spacing : {TimestepSpacing::kUniform, TimestepSpacing::kQuadratic}) {
+    for (int64_t count = 2; count <= 1000; ++count) {
+      const std::vector<int64_t> ts = schedule.sampling_timesteps(count, spacing);
+      ASSERT_EQ(static_cast<int64_t>(ts.size()), count);
+      ASSERT_EQ(ts.front(), 999) << count;
+      ASSERT_EQ(ts.back(), 0) << count;
+      for (size_t i = 1; i < ts.size(); ++i) ASSERT_LT(ts[i], ts[i - 1]) << to_string(spacing) << " " << count;
+    }
+  }
+  EXPECT_THROW(schedule.sampling_timesteps(1001, TimestepSpacing::kUniform), std::invalid_argument);
+  EXPECT_THROW(schedule.sampling_timesteps(0, TimestepSpacing::kUniform), std::invalid_argument);
   EXPECT_THROW(NoiseSchedule(1), std::invalid_argument);
 }
 
+
+// On Gaussian data N(μ, s²) the best x0 estimate is known in closed form, and so is where the sampler's ODE
+// takes a starting point: x_t = √ᾱ μ + √(ᾱ s² + 1 − ᾱ) z keeps z. The second-order solver gets closer in 20
+// steps than DDIM in 50 (0.018 against 0.027; DDIM in 20: 0.067).
+TEST(DiffusionSchedule, DpmSolverFollowsTheSamplingPathCloserThanDdimInFewSteps) {
+  const NoiseSchedule schedule(1000);
+  const double mu = 1.5, s = 0.3;
+  const auto best_x0 = [&](const at::Tensor& x, int64_t t) {
+    const double a = schedule.alpha_bar(t);
+    return mu + std::sqrt(a) * s * s / (a * s * s + 1 - a) * (x - std::sqrt(a) * mu);
+  };
+  const at::Tensor start = torch::linspace(-2.0, 2.0, 9, torch::kFloat64);
+  const double a_start = schedule.alpha_bar(999);
+  const at::Tensor z = (start - std::sqrt(a_start) * mu) / std::sqrt(a_start * s * s + 1 - a_start);
+  const at::Tensor exact = best_x0(std::sqrt(schedule.alpha_bar(0)) * mu + std::sqrt(schedule.alpha_bar(0) * s * s + 1 - schedule.alpha_bar(0)) * z, 0);
+  const auto sample = [&](int64_t steps, bool second_order) {
+    at::Tensor x = start.clone(), x0, earlier_x0;
+    int64_t earlier = -1;
+    const std::vector<int64_t> ts = schedule.sampling_timesteps(steps, diffusion::TimestepSpacing::kUniform);
+    for (int64_t i = 0; i < steps; ++i) {
+      const int64_t t = ts[static_cast<size_t>(i)], previous = i + 1 < steps ? ts[static_cast<size_t>(i + 1)] : -1;
+      x0 = best_x0(x, t);
+      x = second_order ? schedule.dpm_solver_step(x, x0, earlier_x0, earlier, t, previous)
+                       : schedule.ddim_step(x, x0, t, previous);
+      earlier_x0 = x0;
+      earlier = t;
+    }
+    return max_difference(x, exact);
+  };
+  const double ddim_20 = sample(20, false), ddim_50 = sample(50, false), dpm_20 = sample(20, true);
+  EXPECT_LT(sample(1000, false), 0.002);  // many small steps follow the path
+  EXPECT_LT(dpm_20, 0.5 * ddim_20) << "DDIM " << ddim_20 << ", DPM-Solver++ " << dpm_20;
+  EXPECT_LT(dpm_20, ddim_50) << "DDIM " << ddim_50 << ", DPM-Solver++ " << dpm_20;
+
+  // The first step, and a step whose two estimates agree, are DDIM steps.
+  const at::Tensor x = torch::randn({3, 4}), a = torch::randn({3, 4}), b = torch::randn({3, 4});
+  EXPECT_TRUE(schedule.dpm_solver_step(x, a, {}, -1, 700, 300).equal(schedule.ddim_step(x, a, 700, 300)));
+  EXPECT_TRUE(schedule.dpm_solver_step(x, a, b, 900, 700, 0).equal(schedule.ddim_step(x, a, 700, 0)));
+  EXPECT_LT(max_difference(schedule.dpm_solver_step(x, a, a, 900, 700, 300), schedule.ddim_step(x, a, 700, 300)), 1e-5);
+  EXPECT_GT(max_difference(schedule.dpm_solver_step(x, a, b, 900, 700, 300), schedule.ddim_step(x, a, 700, 300)), 1e-2);
+}
 TEST(DiffusionSkeleton, TreePositionsFollowThePathFromTheRoot) {
   // 0 root; 1, 3 its children; 2 under 1; 4 under 3; 5 padding.
   const at::Tensor parents = torch::tensor({-1, 0, 1, 0, 3, -1}, torch::kInt64).view({1, 6});

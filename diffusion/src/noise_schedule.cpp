@@ -38,17 +38,23 @@ at::Tensor NoiseSchedule::add_noise(const at::Tensor& x0, const at::Tensor& nois
   return a.sqrt() * x0 + (1.0 - a).sqrt() * noise;
 }
 
-std::pair<int64_t, int64_t> NoiseSchedule::sampling_step(int64_t i, int64_t count) const {
-  if (count < 1 || count > steps() || i < 0 || i >= count) {
-    throw std::invalid_argument("sampling step " + std::to_string(i) + " of " + std::to_string(count) +
-                                ": the count must be in [1, " + std::to_string(steps()) + "]");
+const char* to_string(TimestepSpacing spacing) { return spacing == TimestepSpacing::kUniform ? "uniform" : "quadratic"; }
+
+std::vector<int64_t> NoiseSchedule::sampling_timesteps(int64_t count, TimestepSpacing spacing) const {
+  if (count < 1 || count > steps()) {
+    throw std::invalid_argument("sampling " + std::to_string(count) + " timesteps: the count must be in [1, " +
+                                std::to_string(steps()) + "]");
   }
-  const auto at = [&](int64_t k) {
-    return count == 1 ? steps() - 1
-                      : static_cast<int64_t>(std::llround(static_cast<double>(steps() - 1) *
-                                                          static_cast<double>(count - 1 - k) / static_cast<double>(count - 1)));
-  };
-  return {at(i), i + 1 < count ? at(i + 1) : -1};
+  std::vector<int64_t> timesteps(static_cast<size_t>(count));
+  const double last = static_cast<double>(steps() - 1);
+  // From the end: each at least one above the next, so that rounding never repeats a timestep.
+  for (int64_t k = count - 1; k >= 0; --k) {
+    const double u = count == 1 ? 1.0 : static_cast<double>(count - 1 - k) / static_cast<double>(count - 1);
+    int64_t t = std::llround(last * (spacing == TimestepSpacing::kUniform ? u : u * u));
+    if (k + 1 < count) t = std::max(t, timesteps[static_cast<size_t>(k + 1)] + 1);
+    timesteps[static_cast<size_t>(k)] = t;
+  }
+  return timesteps;
 }
 
 at::Tensor NoiseSchedule::ddim_step(const at::Tensor& x_t, const at::Tensor& predicted_x0, int64_t t,
@@ -57,6 +63,23 @@ at::Tensor NoiseSchedule::ddim_step(const at::Tensor& x_t, const at::Tensor& pre
   const double a = alpha_bar(t), a_previous = alpha_bar(previous);
   const at::Tensor noise = (x_t - std::sqrt(a) * predicted_x0) / std::sqrt(1.0 - a);
   return std::sqrt(a_previous) * predicted_x0 + std::sqrt(1.0 - a_previous) * noise;
+}
+
+double NoiseSchedule::log_snr(int64_t t) const {
+  const double a = alpha_bar(t);
+  return 0.5 * std::log(a / (1.0 - a));
+}
+
+at::Tensor NoiseSchedule::dpm_solver_step(const at::Tensor& x_t, const at::Tensor& predicted_x0,
+                                          const at::Tensor& earlier_x0, int64_t earlier, int64_t t,
+                                          int64_t previous) const {
+  // The step onto timestep 0 is the schedule's longest in λ: extrapolating over it overshoots (DPM-Solver's
+  // lower order at the end).
+  if (previous <= 0 || !earlier_x0.defined()) return ddim_step(x_t, predicted_x0, t, previous);
+  const double h = log_snr(previous) - log_snr(t), h_earlier = log_snr(t) - log_snr(earlier);
+  const double r = h_earlier / h;
+  const at::Tensor x0 = (1.0 + 0.5 / r) * predicted_x0 - (0.5 / r) * earlier_x0;
+  return ddim_step(x_t, x0, t, previous);
 }
 
 }  // namespace nec::diffusion

@@ -1,4 +1,4 @@
-// DDIM sampling with guidance and overlapping windows.
+// Sampling with DPM-Solver++ or DDIM, guidance and overlapping windows.
 #include "nec/diffusion/sampling.h"
 
 #include "nec/diffusion/windows.h"
@@ -28,6 +28,8 @@ std::pair<double, double> joint_turning(const at::Tensor& theta, const at::Tenso
 }
 
 }  // namespace
+
+const char* to_string(DiffusionSolver solver) { return solver == DiffusionSolver::kDdim ? "ddim" : "dpm++"; }
 
 void DiffusionSamplingOptions::validate() const {
   if (steps < 1) throw std::invalid_argument("steps must be >= 1, got " + std::to_string(steps));
@@ -88,10 +90,12 @@ std::vector<at::Tensor> sample_motions(MotionDenoiserImpl& model, const NoiseSch
   std::vector<at::Tensor> noise;
   for (int s = 0; s < samples; ++s) noise.push_back(seeded_noise(options.seed + static_cast<uint64_t>(s), total, joints, device));
   at::Tensor x = torch::stack(noise) * used;        // (S, T, J, C) standardized
-  at::Tensor x0 = torch::zeros_like(x);
+  at::Tensor x0 = torch::zeros_like(x), earlier_x0;
+  int64_t earlier_t = -1;
   at::Tensor yaw = torch::zeros({samples, total}, x.options());  // heading of each frame from the x0 estimate
+  const std::vector<int64_t> timesteps = schedule.sampling_timesteps(options.steps, options.spacing);
   for (int64_t i = 0; i < options.steps; ++i) {
-    const auto [t, previous] = schedule.sampling_step(i, options.steps);
+    const int64_t t = timesteps[static_cast<size_t>(i)], previous = i + 1 < options.steps ? timesteps[static_cast<size_t>(i + 1)] : -1;
     // Each window in its own frame: turned by the heading at its start.
     std::vector<at::Tensor> local, turns;
     for (const MotionWindow& w : windows) turns.push_back(yaw.select(1, w.start));
@@ -113,7 +117,13 @@ std::vector<at::Tensor> sample_motions(MotionDenoiserImpl& model, const NoiseSch
     x0 = blended / weight_sum * used;
     const at::Tensor rate = model.unstandardize(x0).select(2, 0).select(2, kYawRateChannel) / tat::kYawRateScale;
     yaw = rate.cumsum(1);
-    x = schedule.ddim_step(x, x0, t, previous);
+    if (options.solver == DiffusionSolver::kDdim) {
+      x = schedule.ddim_step(x, x0, t, previous);
+    } else {
+      x = schedule.dpm_solver_step(x, x0, earlier_x0, earlier_t, t, previous);
+      earlier_x0 = x0;
+      earlier_t = t;
+    }
   }
   const at::Tensor motion = model.unstandardize(x0) * used;
   std::vector<at::Tensor> out;

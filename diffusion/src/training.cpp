@@ -37,8 +37,7 @@ constexpr int kValidationBatch = 16;
 constexpr int kValidationBatches = 4;      // the val loss reads at most this many batches
 constexpr size_t kStatisticsClips = 512;   // data statistics from at most this many train clips
 constexpr uint64_t kValidationSeed = 0x76616c6964ull;
-constexpr size_t kSampledClips = 6;         // validation samples clips spread over the val split whole ...
-constexpr int64_t kSampledSteps = 20;       // ... with this many DDIM steps (guidance as generation's default)
+constexpr size_t kSampledClips = 6;         // validation samples clips spread over the val split whole, as generation does
 // A dropped caption still goes through the text encoder (then is replaced): any valid caption does.
 constexpr const char* kPlaceholderCaption = "motion";
 
@@ -75,6 +74,7 @@ void visit_fields(train::ConfigVisitor& v, DiffusionTrainConfig& c) {
   v.field("pose_frames", c.pose_frames, "pose stage: frames drawn from each item's crop, each a pose of its own");
   v.field("caption_dropout", c.caption_dropout, "chance an item's caption is dropped (classifier-free guidance)");
   v.field("velocity_weight", c.velocity_weight, "motion stage: weight of the frame-to-frame difference loss beside the x0 loss");
+  v.field("train_pose_model", c.train_pose_model, "motion stage: train the pose model too (false: frozen, as the paper does)");
   v.field("batch_size", c.batch_size, "items per step over all processes");
   train::visit_cadence_fields(v, c.steps, c.log_every, c.validate_every, c.checkpoint_every);
   v.field("seed", c.seed, "initial weights, batches and every step's random draws");
@@ -161,7 +161,7 @@ DiffusionTrainer::DiffusionTrainer(const DiffusionTrainConfig& config, Diffusion
     model_->fit_statistics(motions);
   } else {
     model_ = pose->model;
-    freeze_pose_model(*model_);
+    if (!config_.train_pose_model) freeze_pose_model(*model_);
   }
   model_->to(device_);
   train_mode();
@@ -178,7 +178,12 @@ DiffusionTrainer::~DiffusionTrainer() = default;
 
 void DiffusionTrainer::train_mode() { set_training_mode(*model_, stage_); }
 
-std::vector<at::Tensor> DiffusionTrainer::trained_parameters() { return diffusion::trained_parameters(*model_, stage_); }
+std::vector<at::Tensor> DiffusionTrainer::trained_parameters() {
+  // Trained together, the pose model learns what a frame is at high noise, where alone it can only give the
+  // mean pose (it never sees which frame it is): docs/diffusion.md "Overfitting".
+  if (stage_ == DiffusionStage::kMotion && config_.train_pose_model) return model_->parameters();
+  return diffusion::trained_parameters(*model_, stage_);
+}
 
 int64_t DiffusionTrainer::trained_parameter_count() const {
   int64_t count = 0;
@@ -287,7 +292,6 @@ std::optional<train::LossTerms> DiffusionTrainer::validate() {
   // Clips spread over the val split sampled whole from their captions: do the bodies move as the real ones do?
   SampledTurning turning;
   DiffusionSamplingOptions options;
-  options.steps = kSampledSteps;
   options.seed = kValidationSeed;
   for (int index = 0; index < sampled_clips_->batches_per_epoch(); ++index) {
     const Batch clip = sampled_clips_->batch(0, index);

@@ -4,10 +4,13 @@
 //
 //   NoiseSchedule schedule(1000);
 //   at::Tensor x_t = schedule.add_noise(x0, noise, t);          // t (B) int64 in [0, 1000)
-//   for (int64_t i = 0; i < 50; ++i) {                          // 50 of the 1000 steps
-//     const auto [t, previous] = schedule.sampling_step(i, 50);
-//     x = schedule.ddim_step(x, predicted_x0, t, previous);      // previous = -1: the last step gives x0
+//   const std::vector<int64_t> ts = schedule.sampling_timesteps(50, TimestepSpacing::kUniform);  // 50 of the 1000
+//   for (size_t i = 0; i < ts.size(); ++i) {
+//     const int64_t previous = i + 1 < ts.size() ? ts[i + 1] : -1;
+//     x = schedule.ddim_step(x, predicted_x0, ts[i], previous);  // previous = -1: the last step gives x0
 //   }
+//   // or DPM-Solver++(2M): the same steps, each also reading the x0 predicted at the step before
+//   x = schedule.dpm_solver_step(x, predicted_x0, earlier_x0, earlier_t, t, previous);
 //
 // ᾱ(t) = f(t + 1) / f(0), f(u) = cos²((u / steps + s) / (1 + s) · π / 2), s = 0.008, with every
 // β = 1 − ᾱ(t) / ᾱ(t − 1) clipped to at most 0.999 (so the last timestep is almost pure noise).
@@ -16,10 +19,17 @@
 #include <ATen/core/Tensor.h>
 
 #include <cstdint>
-#include <utility>
 #include <vector>
 
 namespace nec::diffusion {
+
+// How a sampler's timesteps are spread from steps − 1 down to 0.
+enum class TimestepSpacing {
+  kUniform,    // evenly
+  kQuadratic,  // t = (steps − 1) u², u evenly from 1 to 0: more steps at low noise, where each step's x0
+               // estimate is cleaned of the noise the earlier, noisier ones left (the jitter of few steps)
+};
+const char* to_string(TimestepSpacing spacing);  // "uniform", "quadratic"
 
 class NoiseSchedule {
  public:
@@ -33,13 +43,23 @@ class NoiseSchedule {
   // x_t = √ᾱ_t x0 + √(1 − ᾱ_t) noise for t (B) int64; x0 and noise (B, ...).
   at::Tensor add_noise(const at::Tensor& x0, const at::Tensor& noise, const at::Tensor& t) const;
 
-  // Step i of a sampler that visits `count` timesteps, evenly spaced from
-  // steps − 1 down to 0: {its timestep, the next one (−1 after the last)}.
-  std::pair<int64_t, int64_t> sampling_step(int64_t i, int64_t count) const;
+  // The `count` timesteps a sampler visits, from steps − 1 down to 0, each below the one before; throws
+  // std::invalid_argument unless 1 <= count <= steps.
+  std::vector<int64_t> sampling_timesteps(int64_t count, TimestepSpacing spacing) const;
 
   // DDIM (η = 0): from x_t and the predicted x0 to timestep `previous`
   // (< t; −1: x0 itself).
   at::Tensor ddim_step(const at::Tensor& x_t, const at::Tensor& predicted_x0, int64_t t, int64_t previous) const;
+
+  // DPM-Solver++(2M) (Lu et al. 2022, the multistep second-order solver in its data-prediction form): the
+  // DDIM step with the x0 estimate extrapolated in log signal-to-noise ratio λ from the one made at
+  // timestep `earlier` (> t) to the middle of the step. `earlier_x0` undefined (the first step) or `previous` <= 0
+  // (the last, longest step in λ, where extrapolating overshoots): the DDIM step.
+  at::Tensor dpm_solver_step(const at::Tensor& x_t, const at::Tensor& predicted_x0, const at::Tensor& earlier_x0,
+                             int64_t earlier, int64_t t, int64_t previous) const;
+
+  // λ(t) = log(√ᾱ_t / √(1 − ᾱ_t)), falling with t.
+  double log_snr(int64_t t) const;
 
  private:
   std::vector<double> alpha_bar_;

@@ -5,8 +5,9 @@
 //                 (pose_frames frames drawn from each item's crop, each a pose
 //                 of its own with its root velocity); the caption encoder
 //                 trains with it.
-//   stage motion: the pose model's weights frozen; the temporal blocks and
-//                 the frame encoding trained on crops of data.window_frames.
+//   stage motion: the pose model's weights frozen (or trained too:
+//                 train_pose_model); the temporal blocks and the frame
+//                 encoding trained on crops of data.window_frames.
 //
 //   DiffusionTrainConfig config = read_diffusion_train_config("configs/diffusion_pose_cpu.json");
 //   DiffusionTrainer trainer(config, DiffusionStage::kPose, cache, "cache/", owo, std::nullopt, "spm.model",
@@ -72,6 +73,7 @@ struct DiffusionTrainConfig {
   int64_t pose_frames = 8;         // pose stage: frames drawn from each item's crop
   double caption_dropout = 0.1;    // chance an item's caption is dropped (classifier-free guidance)
   double velocity_weight = 0.0;    // motion stage: weight of velocity_loss beside the x0 loss
+  bool train_pose_model = false;   // motion stage: the pose model trains too (the paper freezes it)
   int64_t steps = 3000;            // the step training ends at
   int64_t batch_size = 32;         // items per step over all ranks
   int64_t log_every = 20;          // progress line cadence off a terminal; 0 = only the last step
