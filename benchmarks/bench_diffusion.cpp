@@ -2,8 +2,10 @@
 //
 //   bench_diffusion [--configs=DIR] [--profile_ops=DIR] [benchmark flags]   # e.g. --benchmark_filter=TrainStep
 //
-// - BM_Sample4s/batch:B: one call of diffusion::sample_motions for B samples
-//   of a 4-s motion (120 frames at 30 fps) at 50 DDIM steps with guidance 2.5
+// - BM_Sample4s/batch:B/ddim50:D: one call of diffusion::sample_motions for B
+//   samples of a 4-s motion (120 frames at 30 fps), D = 0: generation's
+//   defaults (10 DPM-Solver++ steps, quadratic spacing), D = 1: 50 uniform DDIM
+//   steps (the sampling before 2026-12-07); guidance 2.5
 //   (both halves as one batch), on a 24-joint skeleton, with
 //   configs/diffusion_pose_cpu.json's denoiser and random weights (the cost
 //   does not depend on them). Counter peak_rss_mb: the process's peak
@@ -97,7 +99,12 @@ double peak_rss_mb() {
 void BM_Sample4s(benchmark::State& state) {
   static RandomDenoiser denoiser;
   const nec::diffusion::NoiseSchedule schedule(denoiser.model->config().noise_steps);
-  nec::diffusion::DiffusionSamplingOptions options;  // 50 steps, guidance 2.5
+  nec::diffusion::DiffusionSamplingOptions options;  // generation's defaults, guidance 2.5
+  if (state.range(1) == 1) {
+    options.steps = 50;
+    options.solver = nec::diffusion::DiffusionSolver::kDdim;
+    options.spacing = nec::diffusion::TimestepSpacing::kUniform;
+  }
   const int samples = static_cast<int>(state.range(0));
   for (auto _ : state) {
     benchmark::DoNotOptimize(nec::diffusion::sample_motions(*denoiser.model, schedule, denoiser.skeleton,
@@ -206,7 +213,7 @@ void register_train_steps() {
 
 }  // namespace
 
-BENCHMARK(BM_Sample4s)->ArgName("batch")->Arg(1)->Arg(8)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1)->Repetitions(kRepetitions);
+BENCHMARK(BM_Sample4s)->ArgNames({"batch", "ddim50"})->ArgsProduct({{1, 8}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1)->Repetitions(kRepetitions);
 BENCHMARK(BM_Attention)
     ->ArgNames({"joints", "frames", "full"})
     ->ArgsProduct({{20, 60, 140}, {60, 120, 240}, {0, 1}})

@@ -27,7 +27,7 @@
 #       The diffusion model's training steps (pose and motion stage, 22 and 100
 #       joints, 1 and 2 threads) against benchmarks/peer_diffusion_step.py;
 #       sampling (configs/diffusion_pose_cpu.json's denoiser, random weights): a
-#       4-s motion at 50 DDIM steps with guidance, one sample (goal < 3 s on 2
+#       4-s motion by 10 DPM-Solver++ and by 50 DDIM steps with guidance, one sample (goal < 3 s on 2
 #       cores) and a batch of 8, peak memory; and one layer's factorized
 #       attention against full spatio-temporal attention for J = 20, 60, 140
 #       joints and T = 60, 120, 240 frames. About 15 minutes.
@@ -319,10 +319,12 @@ from bench_json import BenchRows
 median = BenchRows(sys.argv[1]).median
 print(f"OMP_WAIT_POLICY={sys.argv[2]}")
 print("""
-| diffusion sampling, 4-s motion, 24 joints, 50 steps, guidance 2.5; median of 3, 2 cores | s | peak memory, MB |
+| diffusion sampling, 4-s motion, 24 joints, guidance 2.5; median of 3, 2 cores | s | peak memory, MB |
 |---|---:|---:|""")
-for batch, label in ((1, "one sample (goal < 3 s)"), (8, "a batch of 8")):
-    print(f"| {label} | {median(f'BM_Sample4s/batch:{batch}') / 1000:.2f} | {median(f'BM_Sample4s/batch:{batch}', 'peak_rss_mb'):.0f} |")
+for ddim50, sampling in ((0, "10 DPM-Solver++ steps (default)"), (1, "50 uniform DDIM steps")):
+    for batch, label in ((1, "one sample (goal < 3 s)"), (8, "a batch of 8")):
+        name = f"BM_Sample4s/batch:{batch}/ddim50:{ddim50}"
+        print(f"| {sampling}, {label} | {median(name) / 1000:.2f} | {median(name, 'peak_rss_mb'):.0f} |")
 print("""
 | one attention layer, ms (factorized / full spatio-temporal = ratio) | T = 60 | T = 120 | T = 240 |
 |---|---:|---:|---:|""")
