@@ -210,6 +210,8 @@ TEST_F(CliDiffusion, BadInputGetsOneLineAndNoOutput) {
   expect_refused(generate("\"a spider walks\" --skeleton " + path("none.bvh") + " -o " + out), "none.bvh");
   expect_refused(generate("\"a spider walks\" --skeleton " + spider() + " -o " + out + " --top-k 5"), "GPT models only", 2);
   expect_refused(generate("\"a spider walks\" --skeleton " + spider() + " -o " + out + " --guidance 0.5"), "guidance", 2);
+  expect_refused(generate("\"a spider walks\" --skeleton " + spider() + " -o " + out + " --solver euler"), "dpm++ or ddim", 2);
+  expect_refused(generate("\"a spider walks\" --skeleton " + spider() + " -o " + out + " --spacing log"), "quadratic or uniform", 2);
   expect_refused("generate \"a spider walks\" --skeleton " + spider() + " -o " + out + " --model " + shared("pose"),
                  "pose-stage");
   expect_refused("generate \"a spider walks\" --skeleton " + spider() + " -o " + out + " --model " + shared("owo"),
