@@ -175,7 +175,7 @@ Trainee& trainee(DiffusionStage stage, int64_t joints) {
   torch::manual_seed(kSeed);
   t.inputs = nec::diffusion::synthetic_diffusion_batch(t.config, stage, joints);
   t.model = nec::diffusion::synthetic_denoiser(t.config, stage, t.inputs);
-  const std::vector<at::Tensor> trained = nec::diffusion::trained_parameters(*t.model, stage);
+  const std::vector<at::Tensor> trained = nec::diffusion::trained_parameters(*t.model, stage, t.config.train_pose_model);
   t.optimizer = nec::train::make_adamw(trained, t.config.optimizer);
   for (const at::Tensor& p : trained) t.trained_parameters += p.numel();
   t.record = nec::bench::record_first_steps(t.model->parameters(), [&] { return train_step(t); });

@@ -49,7 +49,7 @@ TEST(DiffusionPeerStep, FirstTwoLossesEqualThePythonPeers) {
     torch::manual_seed(0);
     const diffusion::SyntheticDiffusionBatch inputs = diffusion::synthetic_diffusion_batch(config, peer.stage, peer.joints);
     diffusion::MotionDenoiser model = diffusion::synthetic_denoiser(config, peer.stage, inputs);
-    auto optimizer = train::make_adamw(diffusion::trained_parameters(*model, peer.stage), config.optimizer);
+    auto optimizer = train::make_adamw(diffusion::trained_parameters(*model, peer.stage, config.train_pose_model), config.optimizer);
     for (int64_t step = 1; step <= 2; ++step) {
       const double loss = diffusion::synthetic_diffusion_train_step(*model, *optimizer, inputs, config, peer.stage, step);
       const double expected = peer.losses[step - 1];

@@ -27,8 +27,11 @@ void set_training_mode(MotionDenoiserImpl& model, DiffusionStage stage) {
   if (stage == DiffusionStage::kMotion) model.text_encoder().eval();
 }
 
-std::vector<at::Tensor> trained_parameters(MotionDenoiserImpl& model, DiffusionStage stage) {
-  return stage == DiffusionStage::kPose ? model.pose_parameters() : model.temporal_parameters();
+std::vector<at::Tensor> trained_parameters(MotionDenoiserImpl& model, DiffusionStage stage, bool train_pose_model) {
+  if (stage == DiffusionStage::kPose) return model.pose_parameters();
+  // Trained together, the pose model learns what a frame is at high noise, where alone it can only give the
+  // mean pose (it never sees which frame it is): docs/diffusion.md "Overfitting".
+  return train_pose_model ? model.parameters() : model.temporal_parameters();
 }
 
 void freeze_pose_model(MotionDenoiserImpl& model) {

@@ -29,8 +29,6 @@ std::pair<double, double> joint_turning(const at::Tensor& theta, const at::Tenso
 
 }  // namespace
 
-const char* to_string(DiffusionSolver solver) { return solver == DiffusionSolver::kDdim ? "ddim" : "dpm++"; }
-
 void DiffusionSamplingOptions::validate() const {
   if (steps < 1) throw std::invalid_argument("steps must be >= 1, got " + std::to_string(steps));
   if (!(guidance >= 1)) throw std::invalid_argument("guidance must be >= 1, got " + std::to_string(guidance));
@@ -117,13 +115,10 @@ std::vector<at::Tensor> sample_motions(MotionDenoiserImpl& model, const NoiseSch
     x0 = blended / weight_sum * used;
     const at::Tensor rate = model.unstandardize(x0).select(2, 0).select(2, kYawRateChannel) / tat::kYawRateScale;
     yaw = rate.cumsum(1);
-    if (options.solver == DiffusionSolver::kDdim) {
-      x = schedule.ddim_step(x, x0, t, previous);
-    } else {
-      x = schedule.dpm_solver_step(x, x0, earlier_x0, earlier_t, t, previous);
-      earlier_x0 = x0;
-      earlier_t = t;
-    }
+    x = options.solver == DiffusionSolver::kDdim ? schedule.ddim_step(x, x0, t, previous)
+                                                 : schedule.dpm_solver_step(x, x0, earlier_x0, earlier_t, t, previous);
+    earlier_x0 = x0;
+    earlier_t = t;
   }
   const at::Tensor motion = model.unstandardize(x0) * used;
   std::vector<at::Tensor> out;

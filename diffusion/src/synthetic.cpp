@@ -101,7 +101,7 @@ MotionDenoiser synthetic_denoiser(const DiffusionTrainConfig& config, DiffusionS
   if (stage == DiffusionStage::kMotion) {
     torch::NoGradGuard no_grad;
     for (at::Tensor& p : model->pose_parameters()) p.add_(torch::randn(p.sizes()) * kPoseStandInStd);
-    freeze_pose_model(*model);
+    if (!config.train_pose_model) freeze_pose_model(*model);
   }
   return model;
 }
@@ -115,7 +115,7 @@ double synthetic_diffusion_train_step(MotionDenoiserImpl& model, torch::optim::O
   optimizer.zero_grad();
   const at::Tensor loss = denoising_objective(model, schedule, inputs.batch, stage, config.velocity_weight);
   loss.backward();
-  train::optimizer_step(optimizer, trained_parameters(model, stage), config.optimizer.grad_clip, lr);
+  train::optimizer_step(optimizer, trained_parameters(model, stage, config.train_pose_model), config.optimizer.grad_clip, lr);
   return loss.item<double>();
 }
 

@@ -179,10 +179,7 @@ DiffusionTrainer::~DiffusionTrainer() = default;
 void DiffusionTrainer::train_mode() { set_training_mode(*model_, stage_); }
 
 std::vector<at::Tensor> DiffusionTrainer::trained_parameters() {
-  // Trained together, the pose model learns what a frame is at high noise, where alone it can only give the
-  // mean pose (it never sees which frame it is): docs/diffusion.md "Overfitting".
-  if (stage_ == DiffusionStage::kMotion && config_.train_pose_model) return model_->parameters();
-  return diffusion::trained_parameters(*model_, stage_);
+  return diffusion::trained_parameters(*model_, stage_, config_.train_pose_model);
 }
 
 int64_t DiffusionTrainer::trained_parameter_count() const {

@@ -7,7 +7,7 @@
 //   set_training_mode(*model, stage);
 //   const at::Tensor loss = denoising_objective(*model, schedule, x, stage, config.velocity_weight);
 //   loss.backward();
-//   train::optimizer_step(*optimizer, trained_parameters(*model, stage), config.optimizer.grad_clip, lr);
+//   train::optimizer_step(*optimizer, trained_parameters(*model, stage, config.train_pose_model), config.optimizer.grad_clip, lr);
 #pragma once
 
 #include "nec/diffusion/checkpoint.h"
@@ -44,9 +44,10 @@ at::Tensor denoising_objective(MotionDenoiserImpl& model, const NoiseSchedule& s
 // Train mode as the stage trains: the motion stage's frozen caption encoder
 // reads captions as it will in generation (no dropout).
 void set_training_mode(MotionDenoiserImpl& model, DiffusionStage stage);
-// The parameters the stage trains: the pose model's, or the temporal blocks' and the frame encoding's.
-std::vector<at::Tensor> trained_parameters(MotionDenoiserImpl& model, DiffusionStage stage);
-// Freezes what the motion stage does not train.
+// The parameters the stage trains: the pose model's; or the temporal blocks' and the frame encoding's, and with
+// train_pose_model (DiffusionTrainConfig) every parameter.
+std::vector<at::Tensor> trained_parameters(MotionDenoiserImpl& model, DiffusionStage stage, bool train_pose_model);
+// Freezes the pose model for a motion stage that does not train it (train_pose_model false).
 void freeze_pose_model(MotionDenoiserImpl& model);
 
 }  // namespace nec::diffusion

@@ -32,7 +32,6 @@ enum class DiffusionSolver {
   kDdim,       // DDIM, η = 0: first order
   kDpmSolver,  // DPM-Solver++(2M): second order from the x0 estimates of this step and the one before
 };
-const char* to_string(DiffusionSolver solver);  // "ddim", "dpm++"
 
 // The defaults: 10 steps of DPM-Solver++, more of them at low noise, as good as 50 uniform DDIM steps
 // (docs/diffusion.md, "Fewer steps").

@@ -9,7 +9,7 @@
 //   torch::manual_seed(0);
 //   SyntheticDiffusionBatch x = synthetic_diffusion_batch(config, DiffusionStage::kMotion, /*joints=*/22);
 //   MotionDenoiser model = synthetic_denoiser(config, DiffusionStage::kMotion, x);
-//   auto adamw = train::make_adamw(trained_parameters(*model, DiffusionStage::kMotion), config.optimizer);
+//   auto adamw = train::make_adamw(trained_parameters(*model, DiffusionStage::kMotion, config.train_pose_model), config.optimizer);
 //   const double loss = synthetic_diffusion_train_step(*model, *adamw, x, config, DiffusionStage::kMotion, 1);
 #pragma once
 
