@@ -20,7 +20,8 @@ int run_eval_t2m(int argc, char** argv) {
                   "all: R-Precision@1/2/3 and MM-Dist of the motions against their captions (mixed, and within\n"
                   "body plan: the plan from a zoo folder name cNNN_<plan>, else the group), FID and Diversity\n"
                   "against the real clips, Multimodality (captions with several samples), Coverage and Novelty AUC\n"
-                  "(Dragon appendix C; windows against the real clips that carry the same caption) and jitter.\n"
+                  "(Dragon appendix C; windows against the real clips that carry the same caption), jitter and the\n"
+                  "joints' turning per second (generated over real: the turning kept).\n"
                   "Each BVH needs its caption in a sidecar CLIP.txt.");
   cli.option("--generated", "DIR", "", "folder of generated BVH files with caption sidecars", true);
   cli.option("--reference", "CACHE", "", "dataset cache of real motion (from `nec prepare`)", true);

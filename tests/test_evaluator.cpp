@@ -375,6 +375,9 @@ TEST_F(EvaluatorTest, RealClipsWrittenAsGeneratedOnesScoreLikeTheRealOnes) {
   EXPECT_LT(zoo.novelty_auc, 0.5);
   EXPECT_NEAR(zoo.jitter, zoo.reference_jitter, 0.02 * zoo.reference_jitter)
       << zoo.jitter << " against " << zoo.reference_jitter;
+  EXPECT_GT(zoo.reference_turning, 5.0) << "the zoo's clips turn their joints";
+  EXPECT_NEAR(zoo.turning, zoo.reference_turning, 0.02 * zoo.reference_turning)
+      << zoo.turning << " against " << zoo.reference_turning;
   const std::string table = evaluator::to_markdown(report);
   EXPECT_NE(table.find("| zoo | 48 / 24 |"), std::string::npos) << table;
 
@@ -390,6 +393,26 @@ TEST_F(EvaluatorTest, RealClipsWrittenAsGeneratedOnesScoreLikeTheRealOnes) {
   EXPECT_TRUE(across.within_plan.skipped_groups.empty());
   EXPECT_EQ(across.coverage_pairs, 320);
   EXPECT_GT(across.coverage_auc, 0.0);
+
+  // The same clips held in their first frame: a statue turns nothing, against the same real turning.
+  {
+    const std::vector<evaluator::GeneratedClip> moving = evaluator::read_generated(dir / "generated", cache.fps, UpAxis::Auto);
+    for (const evaluator::GeneratedClip& clip : moving) {
+      Motion still = clip.prepared.clip.motion;
+      for (int t = 1; t < still.frame_count; ++t) {
+        for (int j = 0; j < still.joint_count; ++j) {
+          still.rotation(t, j) = still.rotation(0, j);
+          still.translation(t, j) = still.translation(0, j);
+        }
+      }
+      write_bvh(clip.path, clip.prepared.clip.skeleton, still);
+    }
+    const evaluator::T2mRow statue =
+        evaluator::evaluate_t2m(session, evaluator::read_generated(dir / "generated", cache.fps, UpAxis::Auto), cache,
+                                Split::Train, options).rows[0];
+    EXPECT_LT(statue.turning, 0.01 * zoo.reference_turning);
+    EXPECT_DOUBLE_EQ(statue.reference_turning, zoo.reference_turning);
+  }
 
   // A generated file without its caption is refused by name.
   fs::remove(fs::path(generated[0].path).replace_extension(".txt"));

@@ -5,6 +5,7 @@
 #include "nec/evaluator/retrieval.h"
 #include "nec/corpus/captions.h"
 #include "nec/motion/error.h"
+#include "nec/motion/frame_rate.h"
 #include "nec/motion/kinematics.h"
 #include "nec/text/caption_text.h"
 
@@ -33,6 +34,13 @@ double clip_jitter(const Clip& clip) {
   flat.reserve(positions.size() * 3);
   for (const Vec3& p : positions) flat.insert(flat.end(), {p.x(), p.y(), p.z()});
   return jitter(flat, clip.motion.frame_count, clip.motion.joint_count, clip.motion.fps);
+}
+
+// How fast the joints of one clip turn, degrees per second (check_frame_rate: the median over frames of the
+// joints' mean turn); NaN under 2 frames. Generated over real: the turning kept (0: a statue).
+double clip_turning(const Clip& clip) {
+  if (clip.motion.frame_count < 2) return kNan;
+  return check_frame_rate(clip).turn_per_second;
 }
 
 // Mean of values[rows], leaving out NaN (NaN when nothing is left).
@@ -109,10 +117,17 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
   const Embeddings motion = to_embeddings(torch::cat(parts));
   const Embeddings text = to_embeddings(session.embed_captions(captions, "generated captions"));
   const Embeddings reference_motion = to_embeddings(session.embed_clips(cache, reference.clips));
-  // Jitter of every clip, once.
-  std::vector<double> generated_jitter, reference_jitter;
-  for (const GeneratedClip& clip : generated) generated_jitter.push_back(clip_jitter(clip.prepared.clip));
-  for (const int clip : reference.clips) reference_jitter.push_back(clip_jitter(cache.clip(clip)));
+  // Jitter and turning of every clip, once.
+  std::vector<double> generated_jitter, reference_jitter, generated_turning, reference_turning;
+  for (const GeneratedClip& clip : generated) {
+    generated_jitter.push_back(clip_jitter(clip.prepared.clip));
+    generated_turning.push_back(clip_turning(clip.prepared.clip));
+  }
+  for (const int index : reference.clips) {
+    const Clip clip = cache.clip(index);
+    reference_jitter.push_back(clip_jitter(clip));
+    reference_turning.push_back(clip_turning(clip));
+  }
 
   std::map<std::string, std::vector<int>> groups;
   for (size_t i = 0; i < generated.size(); ++i) {
@@ -226,6 +241,8 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
 
     row.jitter = mean_of(generated_jitter, rows);
     row.reference_jitter = mean_of(reference_jitter, reference_rows);
+    row.turning = mean_of(generated_turning, rows);
+    row.reference_turning = mean_of(reference_turning, reference_rows);
     report.rows.push_back(std::move(row));
   }
   return report;
@@ -234,7 +251,8 @@ T2mReport evaluate_t2m(EvaluatorSession& session, const std::vector<GeneratedCli
 std::string to_markdown(const T2mReport& report) {
   std::string out = fmt::format(
       "| group | generated / {} clips | R@1 / R@2 / R@3 (batch) | within plan R@3 | MM-Dist | FID | Diversity (real) | "
-      "Multimodality (captions) | Coverage AUC | Novelty AUC | jitter (real) |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+      "Multimodality (captions) | Coverage AUC | Novelty AUC | jitter (real) | turning °/s (real) |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|\n",
       report.split);
   for (const T2mRow& row : report.rows) {
     std::string precision = "—", mm_dist = "—", within_plan = "—";
@@ -245,11 +263,12 @@ std::string to_markdown(const T2mReport& report) {
       mm_dist = number(row.precision.mm_dist.mean);
     }
     if (row.has_within_plan) within_plan = number(row.within_plan.top_k.back().mean);
-    out += fmt::format("| {} | {} / {} | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} ({}) |\n", row.name,
+    out += fmt::format("| {} | {} / {} | {} | {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} ({}) | {} ({}) |\n", row.name,
                        row.generated, row.reference, precision, within_plan, mm_dist, number(row.fid), number(row.diversity),
                        number(row.reference_diversity), number(row.multimodality), row.multimodality_captions,
                        number(row.coverage_auc), number(row.novelty_auc), number(row.jitter, "{:.1f}"),
-                       number(row.reference_jitter, "{:.1f}"));
+                       number(row.reference_jitter, "{:.1f}"), number(row.turning, "{:.1f}"),
+                       number(row.reference_turning, "{:.1f}"));
   }
   return out;
 }
@@ -269,7 +288,9 @@ nlohmann::json to_json(const T2mReport& report) {
                         {"novelty_auc", maybe(row.novelty_auc)},
                         {"coverage_pairs", row.coverage_pairs},
                         {"jitter", maybe(row.jitter)},
-                        {"reference_jitter", maybe(row.reference_jitter)}};
+                        {"reference_jitter", maybe(row.reference_jitter)},
+                        {"turning", maybe(row.turning)},
+                        {"reference_turning", maybe(row.reference_turning)}};
     if (row.has_precision) {
       r["precision"] = to_json(row.precision);
       r["batch_size"] = row.batch_size;

@@ -77,6 +77,7 @@ struct T2mRow {
   double coverage_auc = 0, novelty_auc = 0;  // mean over (generated, reference with the same caption) pairs
   int coverage_pairs = 0;
   double jitter = 0, reference_jitter = 0;   // skeleton diameters / s^3, mean over clips
+  double turning = 0, reference_turning = 0; // the joints' turning, degrees / s (check_frame_rate), mean over clips
 };
 
 struct T2mReport {
