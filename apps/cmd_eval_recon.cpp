@@ -106,7 +106,8 @@ int run_eval_recon(int argc, char** argv) {
   for (const std::string& path : cli.list("--models")) {
     TokenizerOptions options = tokenizer_options(cli);
     options.model = path;
-    tat::TokenizerSession session = open_tokenizer(options);
+    const std::shared_ptr<tat::TokenizerSession> opened = open_tokenizer(options);
+    tat::TokenizerSession& session = *opened;
     tat::TokenizerImpl& tokenizer = *session.model.tokenizer;
     const tat::TatConfig& config = tokenizer.config();
     const double tokens_per_second =

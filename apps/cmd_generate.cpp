@@ -197,20 +197,22 @@ int run_generate(int argc, char** argv) {
   // Sample i written to outputs[i]; returns its frame count.
   std::function<int(int)> write_sample;
   double fps = 30.0;
-  std::optional<gpt::GeneratorSession> gpt_session;
-  std::optional<diffusion::DiffusionSession> diffusion_session;
+  std::shared_ptr<gpt::GeneratorSession> gpt_session;
+  std::shared_ptr<diffusion::DiffusionSession> diffusion_session;
   std::vector<at::Tensor> codes;
   std::vector<Features> motions;
   std::optional<PreparedClip> target;
-  const std::unique_ptr<StancePredictor> stance = open_stance(cli, cli.value("--glove"));
+  const Stance stance = open_stance(cli, cli.value("--glove"));
+  const std::string model_key = files_stamp(model) + "\n" + glove_stamp(cli.value("--glove"));
   if (is_diffusion) {
-    diffusion_session.emplace(diffusion::open_diffusion(model, cli.value("--glove")));
+    diffusion_session = warm<diffusion::DiffusionSession>(WarmKind::Model, model_key,
+                                                          [&] { return diffusion::open_diffusion(model, cli.value("--glove")); });
     fps = diffusion_session->fps();
     const int64_t noise_steps = diffusion_session->model.model->config().noise_steps;
     if (diffusion_sampling.steps > noise_steps) {
       throw UsageError(fmt::format("--steps {} is more than the model's {} noise steps", diffusion_sampling.steps, noise_steps));
     }
-    target = prepare_target(cli.value("--skeleton"), fps, up, stance.get());
+    target = prepare_target(cli.value("--skeleton"), fps, up, stance);
     const int64_t window = diffusion_session->model.model->config().max_frames;
     std::vector<diffusion::DiffusionSegment> segments;
     for (size_t i = 0; i < captions.size(); ++i) {
@@ -223,9 +225,10 @@ int run_generate(int argc, char** argv) {
       return motions[static_cast<size_t>(i)].frame_count;
     };
   } else {
-    gpt_session.emplace(gpt::open_generator(model, cli.value("--glove")));
+    gpt_session = warm<gpt::GeneratorSession>(WarmKind::Model, model_key,
+                                              [&] { return gpt::open_generator(model, cli.value("--glove")); });
     fps = gpt_session->fps();
-    target = prepare_target(cli.value("--skeleton"), fps, up, stance.get());
+    target = prepare_target(cli.value("--skeleton"), fps, up, stance);
     std::vector<gpt::Segment> segments;
     for (size_t i = 0; i < captions.size(); ++i) {
       const int64_t steps = std::max<int64_t>(1, std::lround(seconds[i] * fps / gpt_session->downsampling()));

@@ -31,6 +31,24 @@ void save_match(const std::string& dir, int rank, const DatasetCache& cache, int
   write_file_atomic(stem.string() + ".txt", info.captions.empty() ? "" : info.captions.front() + "\n");
 }
 
+// The database with the evaluator and its index of the database: what a worker keeps between searches.
+struct SearchSession {
+  DatasetCache cache;
+  evaluator::EvaluatorSession session;
+  evaluator::OpenedIndex opened;
+};
+
+SearchSession open_search(const std::string& db, const std::string& evaluator_dir, const std::string& glove) {
+  SearchSession search{read_cache(db), evaluator::open_evaluator(evaluator_dir, glove), {}};
+  search.opened = evaluator::open_retrieval_index(search.session, search.cache, evaluator_dir);
+  const evaluator::OpenedIndex& opened = search.opened;
+  if (opened.built) {
+    fmt::print("indexed {} clips and {} captions{}{}\n", opened.index.clips.size(), opened.index.captions.size(),
+               opened.stored ? " into " + opened.path : "", opened.note.empty() ? "" : " (" + opened.note + ")");
+  }
+  return search;
+}
+
 }  // namespace
 
 int run_retrieve(int argc, char** argv) {
@@ -75,14 +93,16 @@ int run_retrieve(int argc, char** argv) {
   }
 
   const auto start = std::chrono::steady_clock::now();
-  const DatasetCache cache = read_cache(cli.value("--db"));
+  const std::string db = cli.value("--db");
   const std::string evaluator_dir = model_or_default(cli.value("--evaluator"), "evaluator", "--evaluator");
-  evaluator::EvaluatorSession session = evaluator::open_evaluator(evaluator_dir, cli.value("--glove"));
-  const evaluator::OpenedIndex opened = evaluator::open_retrieval_index(session, cache, evaluator_dir);
-  if (opened.built) {
-    fmt::print("indexed {} clips and {} captions{}{}\n", opened.index.clips.size(), opened.index.captions.size(),
-               opened.stored ? " into " + opened.path : "", opened.note.empty() ? "" : " (" + opened.note + ")");
-  }
+  // Keyed by the cache's own files (not the index files a search stores beside them).
+  std::string key = files_stamp(evaluator_dir) + "\n" + glove_stamp(cli.value("--glove"));
+  for (const char* file : {"manifest.json", "features.f32", "skeletons.bin"}) key += "\n" + files_stamp((std::filesystem::path(db) / file).string());
+  const std::shared_ptr<SearchSession> search =
+      warm<SearchSession>(WarmKind::Model, key, [&] { return open_search(db, evaluator_dir, cli.value("--glove")); });
+  const DatasetCache& cache = search->cache;
+  evaluator::EvaluatorSession& session = search->session;
+  const evaluator::OpenedIndex& opened = search->opened;
   const auto query_start = std::chrono::steady_clock::now();
   if (by_motion) {
     const PreparedClip clip = tat::prepare_for_model(cli.value("--motion"), cache.fps, cli.up_axis("--up"));

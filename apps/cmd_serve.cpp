@@ -17,7 +17,8 @@ int run_serve(int argc, char** argv) {
                   "The local studio: a web page to pick or upload a rig (BVH, FBX, GLB, Collada, .x), type captions\n"
                   "on a timeline and generate, transfer a motion onto the rig, search a database by text, watch\n"
                   "the results move and download them as BVH (and GLB for a rigged asset). Jobs run nec's own\n"
-                  "commands one after another (--workers at once, --queue waiting at most). Every file it writes\n"
+                  "commands in workers that keep the models loaded (--workers at once, --queue waiting at most).\n"
+                  "Every file it writes\n"
                   "lies in a work folder it removes when it stops (Ctrl-C).");
   cli.option("--port", "PORT", "8080", "port to listen on (0: any free one)");
   cli.option("--host", "HOST", "127.0.0.1", "address to listen on: 127.0.0.1 is this machine only; 0.0.0.0 exposes\n"
@@ -29,6 +30,8 @@ int run_serve(int argc, char** argv) {
   cli.option("--workers", "N", "1", "jobs run at once");
   cli.option("--queue", "N", "64", "jobs waiting at most; more are refused (HTTP 503)");
   cli.option("--threads", "N", "0", "torch threads of each job; 0 = all cores");
+  cli.flag("--process-per-job", "run every command as a fresh nec process (loading its models each time) instead\n"
+                                "of in workers that keep them loaded");
   cli.example("nec serve                          # then open http://127.0.0.1:8080/");
   cli.example("nec serve --port 9000 --db out/demo/cache --workers 2 --threads 1");
   if (!cli.parse(argc, argv)) return 0;
@@ -50,6 +53,7 @@ int run_serve(int argc, char** argv) {
   options.queue_limit = static_cast<size_t>(queue);
   options.threads_per_job = cli.integer("--threads");
   if (options.threads_per_job < 0) throw UsageError("--threads must be >= 0");
+  options.process_per_command = cli.is_set("--process-per-job");
   options.nec_binary = std::filesystem::read_symlink("/proc/self/exe").string();
 
   // Ctrl-C and SIGTERM are taken by this thread (sigwait) and every other thread leaves them alone.

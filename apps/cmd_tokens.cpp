@@ -77,7 +77,8 @@ int run_encode(int argc, char** argv) {
   cli.example("nec encode walk.bvh --model runs/tat -o walk.tokens.json");
   if (!cli.parse(argc, argv)) return 0;
   const auto start = std::chrono::steady_clock::now();
-  tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
+  const std::shared_ptr<tat::TokenizerSession> opened = open_tokenizer(tokenizer_options(cli));
+  tat::TokenizerSession& session = *opened;
   const std::string& path = cli.positional_value("IN");
   const tat::TokenFile tokens =
       tat::encode_file(session, tat::prepare_for_model(path, session.model.info.fps, cli.up_axis("--up")), path);
@@ -103,11 +104,12 @@ int run_decode(int argc, char** argv) {
   if (!cli.parse(argc, argv)) return 0;
   check_clip_output(cli.value("-o"), cli.value("--skeleton"));
   const auto start = std::chrono::steady_clock::now();
-  tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
+  const std::shared_ptr<tat::TokenizerSession> opened = open_tokenizer(tokenizer_options(cli));
+  tat::TokenizerSession& session = *opened;
   const tat::TokenFile tokens = tat::read_tokens(cli.positional_value("TOKENS.json"));
-  const std::unique_ptr<StancePredictor> stance = open_stance(cli, cli.value("--glove"));
+  const Stance stance = open_stance(cli, cli.value("--glove"));
   const PreparedClip target = prepare_target(cli.value("--skeleton"), session.model.info.fps, cli.up_axis("--up"),
-                                             stance.get());
+                                             stance);
   const tat::DecodeReport report = tat::decode_onto(session, tokens, target, cli.value("--skeleton"),
                                                     corrections(cli, nullptr), cli.value("-o"));
   fmt::print("wrote {}: {} frames on the skeleton of {}{} ({:.2f} s)\n", cli.value("-o"), tokens.frames,
@@ -138,13 +140,14 @@ int run_transfer(int argc, char** argv) {
   if (!cli.parse(argc, argv)) return 0;
   check_clip_output(cli.value("-o"), cli.value("--to"));
   const auto start = std::chrono::steady_clock::now();
-  tat::TokenizerSession session = open_tokenizer(tokenizer_options(cli));
+  const std::shared_ptr<tat::TokenizerSession> opened = open_tokenizer(tokenizer_options(cli));
+  tat::TokenizerSession& session = *opened;
   const std::string& path = cli.positional_value("SRC");
   const PreparedClip source = tat::prepare_for_model(path, session.model.info.fps, cli.up_axis("--up"));
   const tat::TokenFile tokens = tat::encode_file(session, source, path);
-  const std::unique_ptr<StancePredictor> stance = open_stance(cli, cli.value("--glove"));
+  const Stance stance = open_stance(cli, cli.value("--glove"));
   const PreparedClip target = prepare_target(cli.value("--to"), session.model.info.fps, cli.up_axis("--up"),
-                                             stance.get());
+                                             stance);
   const tat::DecodeReport report =
       tat::decode_onto(session, tokens, target, cli.value("--to"), corrections(cli, &source.clip), cli.value("-o"));
   if (!cli.value("--tokens").empty()) tat::write_tokens(cli.value("--tokens"), tokens);

@@ -35,5 +35,9 @@ int run_train_gpt(int argc, char** argv);       // nec train gpt
 int run_train_diffusion(int argc, char** argv); // nec train diffusion
 int run_generate(int argc, char** argv);        // nec generate
 int run_serve(int argc, char** argv);           // nec serve
+int run_worker(int argc, char** argv);          // nec worker
+
+// Runs `nec ARGV[1] ...` (argv[0] is the program), reporting errors as the binary does: the exit code.
+int run_subcommand(int argc, char** argv);
 
 }  // namespace nec::app

@@ -39,6 +39,7 @@ constexpr Subcommand kSubcommands[] = {
     {"transfer", nec::app::run_transfer, "move a clip onto another skeleton (encode + decode)"},
     {"generate", nec::app::run_generate, "motion from text for any skeleton (trained GPT + tokenizer), as BVH"},
     {"serve", nec::app::run_serve, "the local studio: a web page to generate, transfer and search on your rig"},
+    {"worker", nec::app::run_worker, "run commands sent on stdin, keeping models loaded between them (nec serve's)"},
 };
 
 void print_overview() {
@@ -48,8 +49,9 @@ void print_overview() {
              "exit codes: 0 ok, 1 bad input, 2 usage error\n");
 }
 
-int run_command(int argc, char** argv) {
-  nec::assets::register_asset_formats();  // every command reads FBX / glTF / Collada / .x as well as BVH
+}  // namespace
+
+int nec::app::run_subcommand(int argc, char** argv) {
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0) {
     print_overview();
     return argc < 2 ? 2 : 0;
@@ -75,11 +77,10 @@ int run_command(int argc, char** argv) {
   return 2;
 }
 
-}  // namespace
-
 int main(int argc, char** argv) {
   nec::train::keep_large_allocations_in_heap();
-  const int code = run_command(argc, argv);
+  nec::assets::register_asset_formats();  // every command reads FBX / glTF / Collada / .x as well as BVH
+  const int code = nec::app::run_subcommand(argc, argv);
   // Every command has closed its outputs by now. Leaving without the static destructors of libtorch and
   // the libraries it loads, or freeing the models, saves about 80 ms of a 1-s command.
   std::fflush(nullptr);

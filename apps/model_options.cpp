@@ -5,6 +5,7 @@
 
 #include "nec/motion/error.h"
 #include "nec/owo/stance.h"
+#include "nec/text/word_vectors.h"
 
 #include <fmt/format.h>
 
@@ -63,13 +64,20 @@ TokenizerOptions tokenizer_options(const CommandLine& cli) {
   return options;
 }
 
-tat::TokenizerSession open_tokenizer(const TokenizerOptions& options) {
+std::shared_ptr<tat::TokenizerSession> open_tokenizer(const TokenizerOptions& options) {
   use_torch_threads(options.threads);
   try {
-    return tat::open_tokenizer_session(options.model, options.glove, options.overlap_frames);
+    return warm<tat::TokenizerSession>(
+        WarmKind::Model,
+        fmt::format("{}\n{}\noverlap {}", files_stamp(options.model), glove_stamp(options.glove), options.overlap_frames),
+        [&] { return tat::open_tokenizer_session(options.model, options.glove, options.overlap_frames); });
   } catch (const std::invalid_argument& e) {
     throw UsageError(std::string("--window-overlap: ") + e.what());
   }
+}
+
+std::string glove_stamp(const std::string& glove) {
+  return files_stamp(glove.empty() ? text::default_word_vectors_path() : glove);
 }
 
 void declare_stance_options(CommandLine& cli) {
@@ -80,27 +88,33 @@ void declare_stance_options(CommandLine& cli) {
                                  "(the old behaviour; the file's pose then shows in the result)");
 }
 
-std::unique_ptr<StancePredictor> open_stance(const CommandLine& cli, const std::string& glove) {
+Stance open_stance(const CommandLine& cli, const std::string& glove) {
   if (cli.is_set("--rest-from-motion")) {
     if (!cli.value("--stance").empty()) throw UsageError("--stance and --rest-from-motion exclude each other");
-    return nullptr;
+    return {};
   }
-  if (!cli.value("--stance").empty()) {
-    return std::make_unique<owo::NetworkStance>(owo::NetworkStance::open(cli.value("--stance"), glove));
-  }
+  const auto open = [&](const std::string& dir) {
+    Stance stance;
+    stance.key = files_stamp(dir) + "\n" + glove_stamp(glove);
+    stance.network = warm<owo::NetworkStance>(WarmKind::Model, stance.key, [&] { return owo::NetworkStance::open(dir, glove); });
+    return stance;
+  };
+  if (!cli.value("--stance").empty()) return open(cli.value("--stance"));
   const std::string dir = default_model_dir("stance");
   try {
-    if (!dir.empty()) return std::make_unique<owo::NetworkStance>(owo::NetworkStance::open(dir, glove));
+    if (!dir.empty()) return open(dir);
     fmt::print(stderr, "note: no stance network in models/default/stance");
   } catch (const InputError& e) {  // e.g. the word vectors it reads joint names with are not installed
     fmt::print(stderr, "note: the default stance network cannot be used: {}", e.what());
   }
   fmt::print(stderr, "; the skeleton's rest is the mean pose of its motion\n");
-  return nullptr;
+  return {};
 }
 
-PreparedClip prepare_target(const std::string& path, double fps, UpAxis up, const StancePredictor* stance) {
-  PreparedClip target = tat::prepare_target(path, fps, up, stance);
+PreparedClip prepare_target(const std::string& path, double fps, UpAxis up, const Stance& stance) {
+  const std::string key = fmt::format("{}\nfps {} up {}\nstance {}", files_stamp(path), fps, static_cast<int>(up), stance.key);
+  PreparedClip target =
+      *warm<PreparedClip>(WarmKind::Rig, key, [&] { return tat::prepare_target(path, fps, up, stance.network.get()); });
   for (const std::string& warning : target.report.warnings) fmt::print(stderr, "note: {}: {}\n", path, warning);
   return target;
 }

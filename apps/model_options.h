@@ -6,6 +6,7 @@
 #include "command_line.h"
 
 #include "nec/tat/session.h"
+#include "warm_cache.h"
 
 #include <memory>
 #include <string>
@@ -34,9 +35,12 @@ struct TokenizerOptions {
 // The options declared by declare_model_options (model empty without --model).
 TokenizerOptions tokenizer_options(const CommandLine& cli);
 
-// Sets torch threads and opens the tokenizer (tat::open_tokenizer_session); a
+// Sets torch threads and opens the tokenizer (tat::open_tokenizer_session; kept by a worker, warm_cache.h); a
 // bad --window-overlap is a UsageError.
-tat::TokenizerSession open_tokenizer(const TokenizerOptions& options);
+std::shared_ptr<tat::TokenizerSession> open_tokenizer(const TokenizerOptions& options);
+
+// The key part of the word vectors `glove` ("" = the default ones) for warm_cache.h: path, size and time.
+std::string glove_stamp(const std::string& glove);
 
 // Declares --stance and --rest-from-motion: how a skeleton that receives motion gets the rest its motion turns
 // around (tat::prepare_target).
@@ -45,8 +49,14 @@ void declare_stance_options(CommandLine& cli);
 // with --rest-from-motion, or when the default one is missing or cannot be used (no word vectors: a note on
 // stderr says the mean pose is used). `glove`: the word vectors, for a network that reads joint names.
 // InputError for a --stance checkpoint that cannot be used.
-std::unique_ptr<StancePredictor> open_stance(const CommandLine& cli, const std::string& glove);
+// A worker keeps the network (warm_cache.h).
+struct Stance {
+  std::shared_ptr<const StancePredictor> network;  // null: the mean pose of the file's motion
+  std::string key;                                 // its files (warm_cache.h), "" without one
+};
+Stance open_stance(const CommandLine& cli, const std::string& glove);
 // tat::prepare_target, with the target's warnings (a skeleton without limbs, joints on their parents) on stderr.
-PreparedClip prepare_target(const std::string& path, double fps, UpAxis up, const StancePredictor* stance);
+// A worker keeps the prepared rig for the same file (unchanged), rate, up axis and stance network.
+PreparedClip prepare_target(const std::string& path, double fps, UpAxis up, const Stance& stance);
 
 }  // namespace nec::app

@@ -36,11 +36,13 @@ struct JobQueue::Job {
   fs::path log() const { return spec.folder / "log.txt"; }
 };
 
-JobQueue::JobQueue(int workers, size_t capacity, double timeout_seconds, size_t keep_finished)
-    : capacity_(capacity), keep_finished_(keep_finished), timeout_seconds_(timeout_seconds) {
+JobQueue::JobQueue(int workers, size_t capacity, double timeout_seconds, size_t keep_finished, std::string worker_binary)
+    : capacity_(capacity), keep_finished_(keep_finished), timeout_seconds_(timeout_seconds),
+      worker_binary_(std::move(worker_binary)) {
   std::random_device seed;
   next_ = (static_cast<unsigned long long>(seed()) << 20) & 0xffffffffffull;  // ids differ between runs
-  for (int i = 0; i < std::max(1, workers); ++i) workers_.emplace_back([this] { work(); });
+  worker_pids_.assign(static_cast<size_t>(std::max(1, workers)), 0);
+  for (int i = 0; i < std::max(1, workers); ++i) workers_.emplace_back([this, i] { work(i); });
 }
 
 JobQueue::~JobQueue() {
@@ -72,6 +74,15 @@ size_t JobQueue::waiting() const {
   return waiting_.size();
 }
 
+std::vector<int> JobQueue::worker_pids() const {
+  std::lock_guard<std::mutex> hold(lock_);
+  std::vector<int> running;
+  for (const int pid : worker_pids_) {
+    if (pid != 0) running.push_back(pid);
+  }
+  return running;
+}
+
 std::optional<JobStatus> JobQueue::status(const std::string& id) const {
   std::lock_guard<std::mutex> hold(lock_);
   const auto found = jobs_.find(id);
@@ -95,7 +106,17 @@ std::optional<JobStatus> JobQueue::status(const std::string& id) const {
   return out;
 }
 
-void JobQueue::work() {
+void JobQueue::work(int index) {
+  std::unique_ptr<WorkerProcess> worker;
+  if (!worker_binary_.empty()) worker = std::make_unique<WorkerProcess>(worker_binary_);
+  // Started ahead of the jobs, and again right after one died, so that a job finds a process running.
+  const auto keep_worker = [&] {
+    if (!worker) return;
+    worker->start();
+    std::lock_guard<std::mutex> hold(lock_);
+    worker_pids_[static_cast<size_t>(index)] = worker->pid();
+  };
+  keep_worker();
   while (true) {
     std::shared_ptr<Job> job;
     {
@@ -111,12 +132,14 @@ void JobQueue::work() {
     std::error_code ignored;
     fs::create_directories(job->spec.folder / "out", ignored);
     for (const std::vector<std::string>& argv : job->spec.commands) {
-      const CommandOutcome done = run_command(argv, job->spec.folder, job->log(), timeout_seconds_, &job->cancel);
+      const CommandOutcome done = worker ? worker->run(argv, job->spec.folder, job->log(), timeout_seconds_, &job->cancel)
+                                         : run_command(argv, job->spec.folder, job->log(), timeout_seconds_, &job->cancel);
       if (done.exit_code != 0) {
         error = done.error_line.empty() ? "failed with no output" : done.error_line;
         break;
       }
     }
+    keep_worker();
     std::vector<std::string> files;
     if (error.empty()) {
       for (const auto& entry : fs::directory_iterator(job->spec.folder / "out", ignored)) {

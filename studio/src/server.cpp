@@ -370,7 +370,8 @@ struct Studio::State {
     }));
     server.Get("/api/info", guarded([this](const httplib::Request&, httplib::Response& res) {
       answer_json(res, {{"max_upload_bytes", options.max_upload_bytes}, {"queue_limit", options.queue_limit},
-                        {"workers", options.workers}, {"search", !options.db.empty()},
+                        {"workers", options.workers}, {"warm_workers", !options.process_per_command},
+                        {"search", !options.db.empty()},
                         {"models", options.models.empty() ? "default" : options.models},
                         {"max_captions", kMaxCaptions}, {"max_seconds", kMaxSeconds}});
     }));
@@ -443,7 +444,8 @@ Studio::Studio(const StudioOptions& options) : state_(std::make_unique<State>(op
     fs::remove_all(s.work, ignored);
     throw;
   }
-  s.jobs = std::make_unique<JobQueue>(options.workers, options.queue_limit, options.job_timeout_seconds, options.keep_jobs);
+  s.jobs = std::make_unique<JobQueue>(options.workers, options.queue_limit, options.job_timeout_seconds, options.keep_jobs,
+                                      options.process_per_command ? "" : options.nec_binary);
   s.routes();
 }
 

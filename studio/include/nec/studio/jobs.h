@@ -1,7 +1,9 @@
-// The studio's job queue: each job is a list of commands run one after another as child processes in the job's
-// own folder (their results under folder/out/), by a fixed number of workers; at most `capacity` jobs wait.
+// The studio's job queue: each job is a list of commands run one after another in the job's own folder (their
+// results under folder/out/), by a fixed number of workers; at most `capacity` jobs wait. Each worker runs the
+// nec binary's commands in a long-lived `nec worker` of its own (models kept loaded between jobs; restarted
+// after a crash or the time limit), other commands (or all, without a worker binary) as child processes.
 //
-//   JobQueue queue(/*workers=*/1, /*capacity=*/64, /*timeout_seconds=*/300, /*keep_finished=*/200);
+//   JobQueue queue(/*workers=*/1, /*capacity=*/64, /*timeout_seconds=*/300, /*keep_finished=*/200, nec);
 //   std::optional<std::string> id = queue.submit({"generate", folder, {{nec, "generate", ...}}});
 //   if (!id) answer 503;  else queue.status(*id)->state ...
 #pragma once
@@ -41,7 +43,8 @@ struct JobStatus {
 
 class JobQueue {
  public:
-  JobQueue(int workers, size_t capacity, double timeout_seconds, size_t keep_finished);
+  // worker_binary: the nec binary whose commands run in `nec worker` processes; "" = one process per command.
+  JobQueue(int workers, size_t capacity, double timeout_seconds, size_t keep_finished, std::string worker_binary = "");
   ~JobQueue();  // stops the running commands and the workers
   JobQueue(const JobQueue&) = delete;
   JobQueue& operator=(const JobQueue&) = delete;
@@ -50,14 +53,16 @@ class JobQueue {
   std::optional<std::string> submit(JobSpec spec);
   std::optional<JobStatus> status(const std::string& id) const;
   size_t waiting() const;
+  std::vector<int> worker_pids() const;  // the `nec worker` processes running now (for tests and the load check)
 
  private:
   struct Job;
-  void work();
+  void work(int index);
   void forget_old_jobs();  // under lock_: the oldest finished jobs beyond keep_finished_, folders removed
 
   const size_t capacity_, keep_finished_;
   const double timeout_seconds_;
+  const std::string worker_binary_;
   mutable std::mutex lock_;
   std::condition_variable wake_;
   std::map<std::string, std::shared_ptr<Job>> jobs_;
@@ -65,6 +70,7 @@ class JobQueue {
   std::deque<std::string> finished_;  // ids, oldest first
   bool stopping_ = false;
   std::vector<std::thread> workers_;
+  std::vector<int> worker_pids_;  // per queue worker: its nec worker's pid, 0 while none runs
   unsigned long long next_ = 0;
 };
 

@@ -9,8 +9,9 @@
 //   GET  /api/jobs/ID              {"state": queued|running|done|failed, "progress", "error", "files", ...}
 //   GET  /api/jobs/ID/view.html    a nec view page of the job's results (the rig's mesh moving when it has one)
 //   GET  /api/jobs/ID/files/NAME   one result file (BVH, GLB, caption)
-// Jobs run the nec binary's own commands (generate, transfer, retrieve, convert) as child processes from a
-// bounded queue. Every file the studio writes lies in its work folder, removed when it stops. Errors answer
+// Jobs run the nec binary's own commands (generate, transfer, retrieve, convert) from a bounded queue, in
+// long-lived `nec worker` processes that keep the models and rigs they loaded (one per --workers; a worker that
+// crashes or passes the time limit is killed and started again). Every file the studio writes lies in its work folder, removed when it stops. Errors answer
 // {"error": "..."} with 400 (bad input), 404 (no such route, rig or job), 413 (upload too large) or 503 (queue full).
 //
 //   Studio studio(options);          // makes the work folder and the zoo rigs; throws on a bad option
@@ -33,7 +34,8 @@ struct StudioOptions {
   std::string db;                    // a dataset cache for search; "" = no search
   std::string work_parent;           // where the work folder is made; "" = the system's temp folder
   size_t max_upload_bytes = 32u << 20;
-  int workers = 1;                   // jobs run at once
+  int workers = 1;                   // jobs run at once, each worker in a `nec worker` that keeps the models loaded
+  bool process_per_command = false;  // every command a fresh nec process instead (loads its models each time)
   size_t queue_limit = 64;           // jobs waiting at most; more are refused with 503
   double job_timeout_seconds = 300;
   int threads_per_job = 0;           // torch threads of each job's command; 0 = all cores
