@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
@@ -90,6 +91,12 @@ diffusion::TimestepSpacing parse_spacing(const std::string& name) {
   throw UsageError("--spacing must be quadratic or uniform, got " + name);
 }
 
+// A line saying how far the command is, out at once (nec serve shows a job's last line while it runs).
+void progress(const std::string& line) {
+  fmt::print("{}\n", line);
+  std::fflush(stdout);
+}
+
 }  // namespace
 
 int run_generate(int argc, char** argv) {
@@ -153,6 +160,7 @@ int run_generate(int argc, char** argv) {
     diffusion_sampling.spacing = parse_spacing(cli.value("--spacing"));
     diffusion_sampling.guidance = cli.number("--guidance");
     diffusion_sampling.seed = seed;
+    diffusion_sampling.on_step = [](int64_t step, int64_t steps) { progress(fmt::format("denoising step {}/{}", step + 1, steps)); };
   } else {
     refuse_options(cli, {{"--steps", "10"}, {"--solver", "dpm++"}, {"--spacing", "quadratic"}}, "diffusion");
     gpt_sampling.temperature = cli.number("--temperature");
@@ -160,6 +168,9 @@ int run_generate(int argc, char** argv) {
     gpt_sampling.top_p = cli.number("--top-p");
     gpt_sampling.guidance = cli.number("--guidance");
     gpt_sampling.seed = seed;
+    gpt_sampling.on_segment = [&captions](size_t segment, size_t segments) {
+      progress(fmt::format("segment {}/{}: {}", segment + 1, segments, captions[segment]));
+    };
   }
   try {
     if (is_diffusion) {

@@ -168,6 +168,11 @@ TEST_F(CliDiffusion, GeneratesOnASkeletonNoModelSaw) {
                                              " -o " + path("two.bvh") + " --seconds 1"));
   ASSERT_EQ(two.exit_code, 0) << two.output;
   EXPECT_EQ(read_bvh(path("two.bvh")).motion.frame_count, 60);
+  // Progress a line per denoising step (nec serve shows a running job's last line).
+  EXPECT_NE(two.output.find("denoising step 1/4\n"), std::string::npos) << two.output;
+  const size_t last = two.output.find("denoising step 4/4\n");
+  EXPECT_NE(last, std::string::npos) << two.output;
+  EXPECT_GT(last, two.output.find("denoising step 3/4\n")) << two.output;
   // Without --seconds: one window.
   ASSERT_EQ(run_nec(generate("\"a spider walks\" --skeleton " + spider() + " -o " + path("open.bvh"))).exit_code, 0);
   EXPECT_EQ(read_bvh(path("open.bvh")).motion.frame_count, 24);

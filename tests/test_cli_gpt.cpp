@@ -155,6 +155,12 @@ TEST_F(CliGpt, GeneratesOnASkeletonNoModelSaw) {
                                              " -o " + path("two.bvh") + " --seconds 1"));
   ASSERT_EQ(two.exit_code, 0) << two.output;
   EXPECT_EQ(read_bvh(path("two.bvh")).motion.frame_count, 64);
+  // Progress a line per segment, in order (nec serve shows a running job's last line).
+  const size_t first = two.output.find("segment 1/2: a spider walks forward\n");
+  EXPECT_NE(first, std::string::npos) << two.output;
+  const size_t second = two.output.find("segment 2/2: a spider turns left\n");
+  EXPECT_NE(second, std::string::npos) << two.output;
+  EXPECT_GT(second, first) << two.output;
   // One length per caption: 1 s and 0.5 s (8 + 4 steps of 4 frames); a count that fits neither is refused.
   const CommandResult each = run_nec(generate("\"a spider walks forward\" \"a spider turns left\" --skeleton " +
                                               spider() + " -o " + path("each.bvh") + " --seconds 1,0.5"));

@@ -93,6 +93,7 @@ std::vector<at::Tensor> sample_motions(MotionDenoiserImpl& model, const NoiseSch
   at::Tensor yaw = torch::zeros({samples, total}, x.options());  // heading of each frame from the x0 estimate
   const std::vector<int64_t> timesteps = schedule.sampling_timesteps(options.steps, options.spacing);
   for (int64_t i = 0; i < options.steps; ++i) {
+    if (options.on_step) options.on_step(i, options.steps);
     const int64_t t = timesteps[static_cast<size_t>(i)], previous = i + 1 < options.steps ? timesteps[static_cast<size_t>(i + 1)] : -1;
     // Each window in its own frame: turned by the heading at its start.
     std::vector<at::Tensor> local, turns;

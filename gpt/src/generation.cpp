@@ -52,6 +52,7 @@ std::vector<at::Tensor> generate_codes(GeneratorSession& session, const Prepared
   std::vector<at::Tensor> sequences(static_cast<size_t>(samples),
                                     torch::zeros({0, config.codebook_layers}, torch::kInt64));
   for (size_t s = 0; s < segments.size(); ++s) {
+    if (options.on_segment) options.on_segment(s, segments.size());
     const Segment& segment = segments[s];
     const text::TextBatch caption =
         session.gpt.captions.read({segment.caption}, session.caption_vectors ? &*session.caption_vectors : nullptr,

@@ -19,6 +19,7 @@
 #include <ATen/core/Tensor.h>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace nec::tat {
@@ -42,6 +43,7 @@ struct DiffusionSamplingOptions {
   double guidance = 2.5;       // classifier-free guidance scale g >= 1; 1 = none
   uint64_t seed = 0;           // sample i starts from the noise of seed + i
   int64_t overlap_frames = 0;  // frames neighbouring windows share; 0 = a quarter of a window
+  std::function<void(int64_t step, int64_t steps)> on_step;  // called before each denoising step (progress)
 
   // Throws std::invalid_argument naming the bad field.
   void validate() const;

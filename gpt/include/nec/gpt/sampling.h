@@ -22,6 +22,7 @@
 #include <ATen/core/Tensor.h>
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace nec::gpt {
@@ -32,6 +33,7 @@ struct SamplingOptions {
   double top_p = 0.95;       // keep the fewest codes whose probability reaches p, in (0, 1]; 1 = all
   double guidance = 2.5;     // classifier-free guidance scale g >= 1; 1 = none
   uint64_t seed = 0;         // row i draws from the stream of seed + i
+  std::function<void(size_t segment, size_t segments)> on_segment;  // generate_codes: before each segment (progress)
 
   // Throws std::invalid_argument naming the bad field.
   void validate() const;
