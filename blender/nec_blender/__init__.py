@@ -1,6 +1,7 @@
 """nec in Blender: motion from text, motion transfer and text search for the selected armature. Each result comes
-back as a new action on that armature (its bones and rest pose unchanged); the `nec` binary does the work
-(Preferences → Add-ons → nec: its path and an optional models folder)."""
+back as a new action on that armature (its bones and rest pose unchanged); the `nec` binary does the work, in
+one `nec worker` process kept for the Blender session so that the models load once (Preferences → Add-ons →
+nec: its path, an optional models folder, whether to keep the models loaded)."""
 bl_info = {
     "name": "nec",
     "description": "Motion from text, transfer and search for any armature, with the nec binary",
@@ -26,9 +27,13 @@ class NecPreferences(bpy.types.AddonPreferences):
                                      description="a folder with gpt/, diffusion/ and evaluator/ models; "
                                                  "empty: nec's default models")
     threads: bpy.props.IntProperty(name="Threads", default=0, min=0, description="torch threads; 0: all cores")
+    keep_loaded: bpy.props.BoolProperty(name="Keep models loaded", default=True,
+                                        description="run nec in one process kept for the Blender session, which "
+                                                    "loads the models once (the next generation is fast); off: a new "
+                                                    "nec process for every command")
 
     def draw(self, context):
-        for name in ("nec_path", "models", "threads"):
+        for name in ("nec_path", "models", "threads", "keep_loaded"):
             self.layout.prop(self, name)
 
 
@@ -92,6 +97,7 @@ class NecOperator(bpy.types.Operator):
         nec = runner.find_nec(preferences(context).nec_path)
         if nec is None:
             raise runner.NecError("the nec binary was not found: set its path in Preferences → Add-ons → nec")
+        self._nec = nec if preferences(context).keep_loaded else None
         self._armature = context.active_object
         self._folder = scene_io.work_folder()
         rig = scene_io.export_rig_bvh(self._armature, os.path.join(self._folder, "rig.bvh"))
@@ -110,7 +116,7 @@ class NecOperator(bpy.types.Operator):
     def execute(self, context):
         try:
             self.prepare(context)
-            runner.NecRun(self._steps, cwd=self._folder).wait()
+            runner.NecRun(self._steps, cwd=self._folder, nec=self._nec).wait()
             return self.finish(context)
         except (runner.NecError, RuntimeError, OSError) as error:
             self.report({'ERROR'}, str(error))
@@ -119,7 +125,7 @@ class NecOperator(bpy.types.Operator):
     def invoke(self, context, event):
         try:
             self.prepare(context)
-            self._run = runner.NecRun(self._steps, cwd=self._folder)
+            self._run = runner.NecRun(self._steps, cwd=self._folder, nec=self._nec)
         except (runner.NecError, RuntimeError, OSError) as error:
             self.report({'ERROR'}, str(error))
             return {'CANCELLED'}
@@ -321,6 +327,7 @@ def register():
 
 
 def unregister():
+    runner.close_workers()
     del bpy.types.Scene.nec
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)
