@@ -49,6 +49,15 @@
 #       31-joint CMU rig; goals <= 0.5 s and <= 2 s), nec retrieve on a built
 #       index (goal <= 0.5 s), beside a program that only loads LibTorch
 #       (benchmarks/torch_floor.cpp): the start-up no change inside nec removes.
+#   scripts/bench.sh studio
+#       nec serve as a script uses it (benchmarks/studio_latency.py): upload the 31-joint CMU rig, then request ->
+#       done of ten 4-s GPT generations one at a time (goal: median <= 0.15 s) and of ten searches (goal <= 50 ms),
+#       50 concurrent generate requests (all must finish), the studio's and its workers' memory before and after;
+#       warm workers (the default) against --process-per-job in the same run.
+#   scripts/bench.sh blender
+#       The Blender add-on's Generate, from the press to the new action (benchmarks/blender_generate.py; installs
+#       blender): models kept loaded in a nec worker (the default; goal: a later press <= 0.3 s) against a new nec
+#       process per press, taking turns.
 #   scripts/bench.sh assets
 #       Rigged assets: reading FBX and GLB (assimp) against reading BVH, on the
 #       Debian CMU files and a zoo dragon exported by Blender 3.4
@@ -359,6 +368,26 @@ bench_process() {
     --run "nec retrieve, 48-clip index built (goal <= 0.5 s)" "$nec retrieve 'a dog walks forward' --db $data/cache"
 }
 
+bench_studio() {
+  ensure_packages bench assimp-testmodels
+  cmake --build "$build" --target nec
+  local nec="$build"/apps/nec data="$build"/studio_data
+  rm -rf "$data"
+  mkdir -p "$data"
+  "$nec" zoo --out "$data"/zoo --creatures 16 --clips-per-creature 4 --seed 5 --quiet >/dev/null
+  "$nec" prepare zoo="$data"/zoo/seen -o "$data"/cache --quiet >/dev/null
+  "$python" benchmarks/studio_latency.py --nec "$nec" --rig /usr/share/assimp/models/BVH/01_01.bvh --db "$data"/cache \
+    --repeat 10 --concurrent 50 --json "$build"/studio_latency.json
+}
+
+bench_blender() {
+  ensure_packages bench blender assimp-testmodels
+  cmake --build "$build" --target nec
+  mkdir -p "$build"/blender_tmp
+  TMPDIR="$build"/blender_tmp blender -b --factory-startup --python-exit-code 1 --python benchmarks/blender_generate.py \
+    -- "$build"/apps/nec 10 2>"$build"/blender_generate.log | grep '^|'
+}
+
 bench_assets() {
   ensure_packages bench blender assimp-testmodels
   cmake --build "$build" --target bench_assets nec
@@ -408,5 +437,7 @@ case "$section" in
   gpt) bench_gpt ;;
   diffusion) bench_diffusion ;;
   process) bench_process ;;
+  studio) bench_studio ;;
+  blender) bench_blender ;;
   all) bench_motion "$@"; bench_tat; bench_evaluator; bench_gpt; bench_diffusion; bench_process ;;
 esac

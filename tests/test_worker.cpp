@@ -53,6 +53,14 @@ fs::path job_folder(const TempDir& dir, const std::string& name) {
   return folder;
 }
 
+// The model's tensors damaged in place, its size and time kept: only a process that loads it again sees it.
+void damage_in_place(const std::string& model) {
+  const fs::path tensors = fs::path(model) / "tensors.pt";
+  const auto time = fs::last_write_time(tensors);
+  write_file_atomic(tensors.string(), std::string(fs::file_size(tensors), 'x'));
+  fs::last_write_time(tensors, time);
+}
+
 TEST(Worker, RunsCommandsAsTheBinaryDoesAndKeepsTheModelItLoaded) {
   if (!fs::exists(kModels + "/gpt/config.json")) GTEST_SKIP() << "no default models in " << kModels;
   TempDir dir;
@@ -74,10 +82,8 @@ TEST(Worker, RunsCommandsAsTheBinaryDoesAndKeepsTheModelItLoaded) {
 
   // The model's tensors damaged in place (same size, same time): the worker still has the model it loaded ...
   const fs::path tensors = fs::path(model) / "tensors.pt";
-  const auto size = fs::file_size(tensors);
   const auto time = fs::last_write_time(tensors);
-  write_file_atomic(tensors.string(), std::string(size, 'x'));
-  fs::last_write_time(tensors, time);
+  damage_in_place(model);
   ASSERT_EQ(run(generate_args(model, "kept.bvh", 3)).exit_code, 0) << read_file((folder / "log.txt").string());
   EXPECT_EQ(read_file((folder / "kept.bvh").string()), read_file((folder / "warm.bvh").string()));
   EXPECT_EQ(worker.pid(), pid);
@@ -97,6 +103,27 @@ TEST(Worker, RunsCommandsAsTheBinaryDoesAndKeepsTheModelItLoaded) {
   EXPECT_EQ(serve.exit_code, 2);
   EXPECT_NE(serve.error_line.find("does not run `nec serve`"), std::string::npos) << serve.error_line;
   EXPECT_EQ(worker.pid(), pid);
+}
+
+TEST(Worker, KeepsAtMostItsCapOfModelsTheLeastRecentlyUsedOut) {
+  if (!fs::exists(kModels + "/gpt/config.json")) GTEST_SKIP() << "no default models in " << kModels;
+  TempDir dir;
+  const std::string first = dir / "first", second = dir / "second";
+  fs::copy(kModels + "/gpt", first, fs::copy_options::recursive);
+  fs::copy(kModels + "/gpt", second, fs::copy_options::recursive);
+  studio::WorkerProcess worker(kNec, {"--models", "1"});
+  const fs::path folder = job_folder(dir, "job");
+  const auto generate = [&](const std::string& model, const std::string& out) {
+    std::vector<std::string> argv = generate_args(model, out, 0);
+    argv.push_back("--rest-from-motion");  // no stance network: the GPTs are the only models
+    return worker.run(argv, folder, folder / "log.txt", 120).exit_code;
+  };
+  ASSERT_EQ(generate(first, "a.bvh"), 0) << read_file((folder / "log.txt").string());
+  ASSERT_EQ(generate(second, "b.bvh"), 0);
+  damage_in_place(second);
+  EXPECT_EQ(generate(second, "b2.bvh"), 0) << "the last model used is kept";
+  damage_in_place(first);
+  EXPECT_EQ(generate(first, "a2.bvh"), 1) << "the first was dropped for the second and is read again";
 }
 
 TEST(Worker, OneWorkerServesJobAfterJobAndAKilledOrStoppedOneIsReplaced) {
