@@ -434,10 +434,13 @@ TEST(DiffusionLearning, ATinyDenoiserLearnsWhichMotionEachCaptionMeans) {
   EXPECT_LT(last, 0.5 * first);
   // Trained, the samples swing about as far as the real motions do.
   const diffusion::SampledTurning trained = sample_and_measure();
-  EXPECT_GT(trained.pose_kept(), 0.6);
-  EXPECT_LT(trained.pose_kept(), 2.0);  // guidance 2 swings a little wider than the data (1.27 seen)
-  EXPECT_GT(trained.speed_kept(), 0.6);
-  EXPECT_LT(trained.speed_kept(), 2.0);
+  std::printf("trained: pose kept %.3f, speed kept %.3f\n", trained.pose_kept(), trained.speed_kept());
+  // Guidance 2 swings a little wider than the data: 1.27 and 1.29 seen (deterministic here); the bounds leave
+  // room for other BLAS roundings, not for a model that half stands still.
+  EXPECT_GT(trained.pose_kept(), 0.9);
+  EXPECT_LT(trained.pose_kept(), 1.6);
+  EXPECT_GT(trained.speed_kept(), 0.9);
+  EXPECT_LT(trained.speed_kept(), 1.6);
   at::Tensor conditions;
   {
     torch::NoGradGuard no_grad;
