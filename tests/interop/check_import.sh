@@ -11,8 +11,9 @@
 # dog file (both ZXY) are also rewritten in ZYX order, and one CMU file (ZYX)
 # in YXZ. Sources are only read; the
 # rewritten files go to WORKDIR. Exit status: 0 all passed, 1 a check failed,
-# 77 (CTest: skipped) when blender, node or three is missing — the parts that
-# are installed still run. scripts/interop.sh installs everything and runs this.
+# 77 (CTest: skipped) when neither blender nor node + three is installed; with one of them, that importer is
+# checked and the run passes saying what was not checked (fails instead under NEC_REQUIRE_DOWNLOADS, as in CI).
+# scripts/interop.sh installs everything and runs this.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -101,7 +102,14 @@ if [ $status -ne 0 ]; then
   exit 1
 fi
 if [ $have_blender = 0 ] || [ $have_three = 0 ]; then
-  echo "interop: passed what could run; skipped the rest"
-  exit 77
+  # One importer checked is a pass of that importer, not a skip; CI, which installs both (scripts/test.sh), does
+  # not pass on half the check.
+  missing=$([ $have_blender = 0 ] && echo Blender || echo three.js)
+  if [ -n "${NEC_REQUIRE_DOWNLOADS:-}" ]; then
+    echo "interop: FAILED: $missing is missing (NEC_REQUIRE_DOWNLOADS is set: CI must check both importers)"
+    exit 1
+  fi
+  echo "interop: passed in $([ $have_blender = 1 ] && echo Blender || echo three.js); $missing not checked (not installed)"
+  exit 0
 fi
 echo "interop: all files import in three.js and Blender as nec reads them"
