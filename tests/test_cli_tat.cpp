@@ -11,6 +11,7 @@
 #include "nec/tat/tokens.h"
 #include "test_support.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -357,6 +358,12 @@ TEST_F(CliTat, EvalReconWritesATablePerDataset) {
     EXPECT_LT(row["mpjpe"].get<double>(), 50.0);
     EXPECT_GT(row["geodesic_degrees"].get<double>(), 0.0);
     EXPECT_LE(row["geodesic_degrees"].get<double>(), 180.0);
+    // The decoded joints turn (a briefly trained model is not a statue), and the table prints the JSON's value.
+    const double turning = row["pose_turn_kept"].get<double>();
+    EXPECT_GT(turning, 0.01);
+    EXPECT_LT(turning, 3.0);
+    EXPECT_TRUE(contains(run.output, fmt::format(" | {:.2f} | {:.2f} | ", row["geodesic_degrees"].get<double>(), turning)))
+        << turning << "\n" << run.output;
   }
 }
 
