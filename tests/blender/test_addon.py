@@ -14,7 +14,8 @@ Installs and enables the add-on from its zip, then, with the scene at 24 fps (ne
 Both armatures' bones are rolled first (bone axes of their own, unlike the bones the importer gives nec's file).
 Each result must be a new action on the selected armature, named after its caption, spanning the motion's length
 at the scene's rate, with every bone's world position within 0.1 % of the armature's size, and its turn from its rest pose
-within 0.05°, of the same joint in nec's own output file (read by Blender's BVH importer, which the interop tests check against nec's reader); the
+within 0.05°, of the same joint in nec's own output file (read by Blender's BVH importer, which the interop tests check against nec's reader),
+and its position within 0.1 % of the joint's by the file's own forward kinematics (scripts/compare_bvh_positions.py); the
 armatures' existing actions must keep every key. Exits 1 on the first failed check."""
 import glob
 import math
@@ -24,6 +25,9 @@ import sys
 import addon_utils
 import bpy
 from mathutils import Vector
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+import compare_bvh_positions as file_fk  # noqa: E402  (the BVH's own forward kinematics, neither Blender's nor nec's)
 
 NEC, ZIP, DATABASE, MODELS = sys.argv[sys.argv.index("--") + 1:]
 TOLERANCE = 1e-3  # of the armature's size
@@ -132,6 +136,27 @@ def check_action(armature, action, path, label):
             if turn > worst_turn:
                 worst_turn, where_turn = turn, (frame, bone.name)
     bpy.data.objects.remove(source, do_unlink=True)
+    # Against the file's own forward kinematics too (not Blender's importer): at the scene frames that fall on a
+    # frame of the file (24 of its 30 fps: every fourth), the first, middle and last of them.
+    joints, file_frames = file_fk.read_bvh(path)
+    on_file = [f for f in range(1, int(last) + 1)
+               if abs((f - 1) / FPS / frame_time - round((f - 1) / FPS / frame_time)) < 1e-3
+               and round((f - 1) / FPS / frame_time) < len(file_frames)]
+    fk_worst, fk_where, compared = 0.0, None, 0
+    for frame in sorted({on_file[0], on_file[len(on_file) // 2], on_file[-1]}):
+        bpy.context.scene.frame_set(frame)
+        places = file_fk.positions(joints, file_frames[round((frame - 1) / FPS / frame_time)])
+        for bone in armature.pose.bones:
+            gap = (armature.matrix_world @ Vector(places[bone.name]) - armature.matrix_world @ bone.head).length / size
+            compared += 1
+            if gap > fk_worst:
+                fk_worst, fk_where = gap, (frame, bone.name)
+    check(compared == 3 * len(armature.pose.bones) or (len(on_file) < 3 and compared > 0),
+          f"{label}: {compared} bone positions compared with the file's forward kinematics")
+    print(f"{label}: against the file's own forward kinematics ({compared} bone positions): largest gap "
+          f"{fk_worst:.2e} (at {fk_where})", flush=True)
+    check(fk_worst <= TOLERANCE, f"{label}: a bone is {fk_worst:.2e} of the armature's size from the file's own "
+                                 f"forward kinematics at {fk_where}")
     print(f"{label}: {len(armature.pose.bones)} bones, frames 1-{last:g}: largest joint gap {worst:.2e} of the "
           f"armature's size (at frame, bone {where}), largest turn gap {math.degrees(worst_turn):.2e}° "
           f"(at {where_turn})", flush=True)
