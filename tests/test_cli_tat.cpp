@@ -108,6 +108,14 @@ TEST_F(CliTat, TheSameSeedTrainsTheSameModel) {
     config["seed"] = seed;
     const CommandResult run = train(config, out, "--steps 4");
     EXPECT_EQ(run.exit_code, 0) << run.output;
+    // The validation reports how much of the joints' turning the decoded clips keep: some, after 3 steps.
+    const std::string validation = last_line_starting(run.output, "validation at step 3:");
+    const size_t kept = validation.find("val_turning_kept ");
+    EXPECT_NE(kept, std::string::npos) << run.output;
+    if (kept != std::string::npos) {
+      EXPECT_GT(std::stod(validation.substr(kept + 17)), 0.0) << validation;
+      EXPECT_LT(std::stod(validation.substr(kept + 17)), 3.0) << validation;
+    }
     return last_line_starting(run.output, "step 4/4");
   };
   auto losses = [](const std::string& line) { return line.substr(line.find("loss")); };
