@@ -112,6 +112,10 @@ void JobQueue::work(int index) {
   // Started ahead of the jobs, and again right after one died, so that a job finds a process running.
   const auto keep_worker = [&] {
     if (!worker) return;
+    {
+      std::lock_guard<std::mutex> hold(lock_);
+      if (stopping_) return;  // the queue is going: no new process to stop again at once
+    }
     worker->start();
     std::lock_guard<std::mutex> hold(lock_);
     worker_pids_[static_cast<size_t>(index)] = worker->pid();
