@@ -15,6 +15,7 @@
 #include "nec/motion/error.h"
 
 #include <fcntl.h>
+#include <malloc.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
@@ -76,6 +77,9 @@ int run_request(const json& request, int quiet_stdout, int own_stderr) {
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   const int code = run_subcommand(static_cast<int>(args.size()), argv.data());
+  // nec keeps freed memory in its heap (train/heap.h: no trimming, for training's speed); a worker lives on
+  // after a command's peak (2.1 GB while a search embeds a database for its index): give it back.
+  malloc_trim(0);
   std::cout.flush();
   std::cerr.flush();
   std::fflush(nullptr);

@@ -1,6 +1,6 @@
 // nec worker and the studio's use of it: a command run in a worker writes what the one-shot binary writes; the
 // worker keeps the model it loaded (it still generates after the model's file is damaged in place, and loads it
-// again once the file's time changes); one worker process serves job after job; a worker killed mid-job (kill -9)
+// again once the file's time changes) but not the memory of a command's peak; one worker process serves job after job; a worker killed mid-job (kill -9)
 // or stopped at the time limit fails that job with a clear message and the next job runs in a fresh one.
 #include "nec/motion/files.h"
 #include "nec/studio/jobs.h"
@@ -12,7 +12,9 @@
 #include <signal.h>
 
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -124,6 +126,33 @@ TEST(Worker, KeepsAtMostItsCapOfModelsTheLeastRecentlyUsedOut) {
   EXPECT_EQ(generate(second, "b2.bvh"), 0) << "the last model used is kept";
   damage_in_place(first);
   EXPECT_EQ(generate(first, "a2.bvh"), 1) << "the first was dropped for the second and is read again";
+}
+
+// The resident memory of a process, MiB (0 when it cannot be read).
+double resident_mib(pid_t pid) {
+  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return 0.0;
+}
+
+TEST(Worker, GivesBackTheMemoryOfACommandsPeak) {
+  if (!fs::exists(kModels + "/evaluator/config.json")) GTEST_SKIP() << "no default models in " << kModels;
+  TempDir dir;
+  ASSERT_EQ(testing::run_nec("zoo --out " + dir / "zoo" + " --creatures 16 --clips-per-creature 4 --seed 5 --quiet").exit_code, 0);
+  ASSERT_EQ(testing::run_nec("prepare zoo=" + dir / "zoo/seen" + " -o " + dir / "db" + " --quiet").exit_code, 0);
+  studio::WorkerProcess worker(kNec);
+  const fs::path folder = job_folder(dir, "job");
+  // The first search embeds the whole database for its index: about 2 GB at its peak on 64 clips.
+  const studio::CommandOutcome searched = worker.run({kNec, "retrieve", "a person jumps", "--db", dir / "db", "-k", "3",
+                                                      "--save", "out"}, folder, folder / "log.txt", 300);
+  ASSERT_EQ(searched.exit_code, 0) << read_file((folder / "log.txt").string());
+  const double after = resident_mib(worker.pid());
+  std::printf("worker after building a 64-clip index: %.0f MiB\n", after);
+  EXPECT_GT(after, 50.0);
+  EXPECT_LT(after, 800.0) << "the worker kept a command's peak";
 }
 
 TEST(Worker, OneWorkerServesJobAfterJobAndAKilledOrStoppedOneIsReplaced) {
