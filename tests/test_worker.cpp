@@ -1,7 +1,8 @@
 // nec worker and the studio's use of it: a command run in a worker writes what the one-shot binary writes; the
 // worker keeps the model it loaded (it still generates after the model's file is damaged in place, and loads it
 // again once the file's time changes) but not the memory of a command's peak; one worker process serves job after job; a worker killed mid-job (kill -9)
-// or stopped at the time limit fails that job with a clear message and the next job runs in a fresh one.
+// or stopped at the time limit fails that job with a clear message and the next job runs in a fresh one; one that
+// died between jobs is replaced before the next.
 #include "nec/motion/files.h"
 #include "nec/studio/jobs.h"
 #include "nec/studio/subprocess.h"
@@ -184,6 +185,15 @@ TEST(Worker, OneWorkerServesJobAfterJobAndAKilledOrStoppedOneIsReplaced) {
   EXPECT_EQ(wait_for(queue, after).state, studio::JobState::Done) << wait_for(queue, after).error;
   ASSERT_EQ(queue.worker_pids().size(), 1u);
   EXPECT_NE(queue.worker_pids(), pids);
+
+  // A worker that died between jobs (killed while idle) is replaced before the next job, which runs.
+  const std::vector<int> idle = queue.worker_pids();
+  ASSERT_EQ(idle.size(), 1u);
+  ASSERT_EQ(kill(idle[0], SIGKILL), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const std::string after_idle = *quick("e");
+  EXPECT_EQ(wait_for(queue, after_idle).state, studio::JobState::Done) << wait_for(queue, after_idle).error;
+  EXPECT_NE(queue.worker_pids(), idle);
 
   // Past the time limit (3 s): stopped, failed with the reason, and the next job runs.
   const std::vector<int> before = queue.worker_pids();

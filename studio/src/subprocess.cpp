@@ -87,6 +87,9 @@ CommandOutcome run_command(const std::vector<std::string>& argv, const std::file
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
   posix_spawn_file_actions_addchdir_np(&actions, folder.c_str());
+  // Nothing else of the studio's: cpp-httplib's sockets are not close-on-exec, and a child holding a client's
+  // connection or the listening socket would keep them open after the studio lets them go.
+  posix_spawn_file_actions_addclosefrom_np(&actions, STDERR_FILENO + 1);
   pid_t pid = 0;
   const int spawned = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
@@ -141,6 +144,7 @@ std::string WorkerProcess::start() {
   posix_spawn_file_actions_adddup2(&actions, ends[1], STDIN_FILENO);
   posix_spawn_file_actions_adddup2(&actions, ends[1], STDOUT_FILENO);
   posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addclosefrom_np(&actions, STDERR_FILENO + 1);  // as run_command
   pid_t pid = 0;
   const int spawned = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
@@ -168,6 +172,12 @@ CommandOutcome WorkerProcess::run(const std::vector<std::string>& argv, const st
                                   const std::atomic<bool>* cancel) {
   if (argv.empty() || argv[0] != nec_) return run_command(argv, folder, log, timeout_seconds, cancel);
   CommandOutcome outcome;
+  int status = 0;
+  if (pid_ != 0 && waitpid(pid_, &status, WNOHANG) == pid_) {  // it died between commands: a fresh one takes this
+    ::close(channel_);
+    pid_ = 0;
+    channel_ = -1;
+  }
   outcome.error_line = start();
   if (pid_ == 0) return outcome;
   nlohmann::json request = {{"args", std::vector<std::string>(argv.begin() + 1, argv.end())},
@@ -196,7 +206,6 @@ CommandOutcome WorkerProcess::run(const std::vector<std::string>& argv, const st
       if (n < 0 && errno == EINTR) continue;
       // The worker closed its end: it died during the command (a crash, killed from outside).
       ::close(channel_);
-      int status = 0;
       waitpid(pid_, &status, 0);
       pid_ = 0;
       channel_ = -1;
