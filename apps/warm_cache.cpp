@@ -54,12 +54,6 @@ void enable_warm_cache(const WarmCacheLimits& limits) {
   c.limits = limits;
 }
 
-bool warm_cache_enabled() {
-  Cache& c = cache();
-  std::lock_guard<std::mutex> hold(c.lock);
-  return c.enabled;
-}
-
 std::string files_stamp(const std::string& path) {
   std::error_code error;
   if (!fs::is_directory(path, error)) return stamp_of(path);

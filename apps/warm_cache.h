@@ -23,7 +23,6 @@ struct WarmCacheLimits {
 };
 
 void enable_warm_cache(const WarmCacheLimits& limits);
-bool warm_cache_enabled();
 
 // "path size mtime" of a file, or of every file below a folder (a model directory), sorted; "path missing" when
 // there is none: a key that changes whenever the files do, so a retrained model is loaded again.

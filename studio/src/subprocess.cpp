@@ -155,16 +155,20 @@ std::string WorkerProcess::start() {
   }
   pid_ = pid;
   channel_ = ends[0];
-  ++starts_;
   return "";
 }
 
 void WorkerProcess::stop() {
   if (pid_ == 0) return;
+  const pid_t pid = pid_;
+  forget();  // its input closed first: a worker between commands ends on its own
+  terminate(pid);
+}
+
+void WorkerProcess::forget() {
   ::close(channel_);
-  terminate(pid_);
-  pid_ = 0;
   channel_ = -1;
+  pid_ = 0;
 }
 
 CommandOutcome WorkerProcess::run(const std::vector<std::string>& argv, const std::filesystem::path& folder,
@@ -173,11 +177,7 @@ CommandOutcome WorkerProcess::run(const std::vector<std::string>& argv, const st
   if (argv.empty() || argv[0] != nec_) return run_command(argv, folder, log, timeout_seconds, cancel);
   CommandOutcome outcome;
   int status = 0;
-  if (pid_ != 0 && waitpid(pid_, &status, WNOHANG) == pid_) {  // it died between commands: a fresh one takes this
-    ::close(channel_);
-    pid_ = 0;
-    channel_ = -1;
-  }
+  if (pid_ != 0 && waitpid(pid_, &status, WNOHANG) == pid_) forget();  // died between commands: a fresh one takes this
   outcome.error_line = start();
   if (pid_ == 0) return outcome;
   nlohmann::json request = {{"args", std::vector<std::string>(argv.begin() + 1, argv.end())},
@@ -205,10 +205,8 @@ CommandOutcome WorkerProcess::run(const std::vector<std::string>& argv, const st
       }
       if (n < 0 && errno == EINTR) continue;
       // The worker closed its end: it died during the command (a crash, killed from outside).
-      ::close(channel_);
       waitpid(pid_, &status, 0);
-      pid_ = 0;
-      channel_ = -1;
+      forget();
       const std::string said = error_line_of(log);
       outcome.error_line = "nec stopped during the job (" + ending(status) + ")" + (said.empty() ? "" : ": " + said);
       return outcome;

@@ -47,16 +47,15 @@ class WorkerProcess {
   // commands go nowhere: a command's, a crash's included, go to that command's log.
   std::string start();
   pid_t pid() const { return pid_; }  // 0 while none runs
-  int starts() const { return starts_; }
 
  private:
   void stop();  // SIGTERM, SIGKILL after a grace time; reaped
+  void forget();  // the worker is gone (reaped): its channel closed, none runs
 
   std::string nec_;
   std::vector<std::string> extra_;
   pid_t pid_ = 0;
   int channel_ = -1;  // our end of the socket pair that is the worker's stdin and stdout
-  int starts_ = 0;
 };
 
 // The last non-empty line of a text file ("" when none), reading at most its last `window` bytes.
