@@ -122,9 +122,22 @@ int run_local_workers(const std::string& program, const std::vector<std::string>
         if (forwarded && code == 130) {
           result = result == 0 ? code : result;
         } else if (code != 0 && !stopping) {
-          std::fprintf(log, "nec: rank %zu %s; stopping the other %zu rank(s)\n", r, describe(status).c_str(), left);
+          // A rank that died is often seen after the one that failed because of it (its collective's peer
+          // closed): a rank already killed by a signal is named as the cause.
+          const size_t others = left;  // still running when this failure was seen
+          size_t cause = r;
+          int cause_status = status;
+          for (size_t o = 0; o < workers.size() && WIFEXITED(status); ++o) {
+            int other = 0;
+            if (!running[o] || ::waitpid(workers[o], &other, WNOHANG) != workers[o]) continue;
+            running[o] = false;
+            --left;
+            if (WIFSIGNALED(other)) cause = o, cause_status = other;
+          }
+          std::fprintf(log, "nec: rank %zu %s; stopping the other %zu rank(s)\n", cause, describe(cause_status).c_str(),
+                       others);
           std::fflush(log);
-          result = code;
+          result = exit_code_of(cause_status);
           stopping = true;
           signal_all(SIGTERM);
           stop_time = std::chrono::steady_clock::now() +
