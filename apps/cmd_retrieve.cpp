@@ -63,6 +63,10 @@ int run_retrieve(int argc, char** argv) {
   cli.option("--evaluator", "EVAL", "", "evaluator checkpoint (from `nec train evaluator`, e.g. runs/eval/best);\n"
                                         "default: models/default/evaluator");
   cli.option("-k", "K", "5", "how many results");
+  cli.option("--caption-weight", "W", "0.5", "how much the database's own captions count against its motions, 0-1:\n"
+                                             "the query is also matched with each clip's caption texts by the\n"
+                                             "pretrained sentence encoder (0: the motions alone, as the evaluator's\n"
+                                             "R-Precision; a clip without captions is ranked by its motion)");
   cli.option("--plan", "PLAN", "", "only clips of this body plan or dataset, e.g. quadruped, dog, bandai");
   cli.option("--view", "PAGE.html", "", "also write a page that plays the matched clips side by side");
   cli.option("--save", "DIR", "", "also write the matched clips as DIR/1.bvh ... DIR/K.bvh (on the skeleton the cache\n"
@@ -79,6 +83,8 @@ int run_retrieve(int argc, char** argv) {
   if (by_motion == !captions.empty()) throw UsageError("give either a CAPTION or --motion CLIP");
   const int64_t k = cli.integer("-k");
   if (k < 1) throw UsageError("-k must be >= 1");
+  const double caption_weight = cli.number("--caption-weight");
+  if (!(caption_weight >= 0.0 && caption_weight <= 1.0)) throw UsageError("--caption-weight must be in [0, 1]");
   const std::string view = cli.value("--view");
   if (!view.empty() && std::filesystem::exists(view)) throw UsageError(view + " exists; choose another --view file");
   const std::string save = cli.value("--save");
@@ -117,8 +123,11 @@ int run_retrieve(int argc, char** argv) {
       const CacheClip& c = cache.clips[static_cast<size_t>(clip)];
       return c.dataset == plan || evaluator::body_plan_of(c) == plan;
     };
-    const std::vector<evaluator::Match> top =
-        opened.index.nearest_clips(session.embed_captions({captions.front()}, "the caption"), static_cast<int>(k), keep);
+    evaluator::CaptionBlend blend;
+    blend.weight = static_cast<float>(caption_weight);
+    if (blend.weight > 0.f) blend.text = evaluator::caption_text_vectors({captions.front()}, "the caption");
+    const std::vector<evaluator::Match> top = opened.index.nearest_clips(
+        session.embed_captions({captions.front()}, "the caption"), static_cast<int>(k), keep, blend);
     if (top.empty()) throw InputError(cli.value("--db"), 0, "has no clip of plan or dataset '" + plan + "'");
     fmt::print("| rank | score | clip | span (s) | caption |\n|---|---|---|---|---|\n");
     std::vector<viewer::ViewClip> views;

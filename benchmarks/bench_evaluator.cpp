@@ -34,9 +34,12 @@
 // - BM_EmbedMotions/joints:J/threads:N: OwO joint embeddings of the batch's
 //   skeletons (configs/owo_cpu.json's encoder, untrained, without names) +
 //   the motion encoder on 32 random 120-frame clips (4 s at 30 fps); counter clips_per_s.
-// - BM_RetrievalQuery/threads:N: one caption embedded and ranked against
-//   10,000 unit-length clip embeddings (RetrievalIndex::nearest_clips, k = 5),
-//   the index in memory; time per query. Goal: < 20 ms on 2 cores.
+// - BM_RetrievalQuery/threads:N/captions:C: one caption embedded and ranked
+//   against 10,000 unit-length clip embeddings (RetrievalIndex::nearest_clips,
+//   k = 5), the index in memory; time per query. With C = 3 each clip also has
+//   three captions and the query is blended with them (`nec retrieve`'s
+//   default --caption-weight 0.5: the query through the sentence encoder too).
+//   Goal: < 20 ms on 2 cores.
 // Each runs 5 repetitions (unless --benchmark_repetitions is given) and
 // reports mean, median, stddev, min and max of wall-clock and process CPU time.
 #include "nec/evaluator/evaluator.h"
@@ -311,12 +314,30 @@ void BM_RetrievalQuery(benchmark::State& state) {
       torch::randn({kIndexClips, index.dim}), torch::nn::functional::NormalizeFuncOptions().dim(1));
   index.clip_embeddings.assign(rows.data_ptr<float>(), rows.data_ptr<float>() + rows.numel());
   for (int64_t i = 0; i < kIndexClips; ++i) index.clips.push_back(static_cast<int>(i));
+  const int64_t captions_per_clip = state.range(1);
+  if (captions_per_clip > 0) {
+    if (!fs::exists(nec::text::default_sentence_encoder_dir() + "/model.json")) {
+      state.SkipWithError("no sentence encoder: run scripts/setup_sentence_encoder.sh");
+      return;
+    }
+    index.text_dim = 512;
+    const at::Tensor texts = torch::nn::functional::normalize(torch::randn({kIndexClips * captions_per_clip, index.text_dim}),
+                                                              torch::nn::functional::NormalizeFuncOptions().dim(1));
+    index.caption_texts.assign(texts.data_ptr<float>(), texts.data_ptr<float>() + texts.numel());
+    for (int64_t i = 0; i < kIndexClips; ++i) {
+      std::vector<int>& rows = index.clip_captions.emplace_back();
+      for (int64_t c = 0; c < captions_per_clip; ++c) rows.push_back(static_cast<int>(i * captions_per_clip + c));
+    }
+  }
   const std::vector<std::string> all = captions();
   size_t next = 0;
   for (auto _ : state) {
     c10::InferenceMode inference;
-    const at::Tensor query = s->model->embed_text(s->reader.read({all[next++ % all.size()]}, &*s->vectors, "query"));
-    const std::vector<nec::evaluator::Match> top = index.nearest_clips(query, 5, {});
+    const std::string& caption = all[next++ % all.size()];
+    const at::Tensor query = s->model->embed_text(s->reader.read({caption}, &*s->vectors, "query"));
+    nec::evaluator::CaptionBlend blend;
+    if (captions_per_clip > 0) blend = {nec::evaluator::caption_text_vectors({caption}, "query"), 0.5f};
+    const std::vector<nec::evaluator::Match> top = index.nearest_clips(query, 5, {}, blend);
     benchmark::DoNotOptimize(top.data());
   }
 }
@@ -349,7 +370,10 @@ void register_all() {
                ->Args({joints, 2}),
            joints == 22 ? 5 : 2);
   }
-  common(benchmark::RegisterBenchmark("BM_RetrievalQuery", BM_RetrievalQuery)->ArgNames({"threads"})->Arg(1)->Arg(2), 50);
+  common(benchmark::RegisterBenchmark("BM_RetrievalQuery", BM_RetrievalQuery)
+             ->ArgNames({"threads", "captions"})
+             ->ArgsProduct({{1, 2}, {0, 3}}),
+         50);
 }
 
 }  // namespace

@@ -10,14 +10,16 @@
 #    keep (scripts/vertical_range.sh);
 #  - generation on the test split of the training cache (the shared CMU takes the models never trained on
 #    come out as their own group, cmu_free);
-#  - the user-style queries of benchmarks/data/queries.tsv through `nec retrieve` (scripts/eval_queries.py) on
-#    the locomotion and other families' caches together, with these models' evaluator and, when given, a
-#    baseline's;
+#  - the user-style queries of benchmarks/data/queries.tsv and queries_heldout.tsv through `nec retrieve`
+#    (scripts/eval_queries.py) on 96 new zoo creatures of every plan and Debian's CMU files, with these models'
+#    evaluator (blended with the clips' captions, `nec retrieve`'s default, and by the motions alone) and, when
+#    given, a baseline's; and the near-action confusion tables (scripts/confusion_table.py);
 #  - with a baseline, its GPT on the same gestures and vertical clips (judged by these models' evaluator) and
 #    the vertical range it keeps.
 #   scripts/eval_default_models.sh MODELS TRAIN_CACHE OUT [BASELINE_MODELS]
 # CLIPS: at most this many clips per dataset and family (default 60); SAMPLES per caption (default 2).
-# Writes OUT/<family>/{zoo,cache,gpt/t2m.md,retrieval.md}, OUT/vertical_range.md, OUT/train-test/t2m.md, OUT/queries*.md and
+# Writes OUT/<family>/{zoo,cache,gpt/t2m.md,retrieval.md}, OUT/vertical_range.md, OUT/train-test/t2m.md, OUT/queries*.md,
+# OUT/confusion.md and
 # OUT/summary.md (every table, in that order).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -79,13 +81,25 @@ scripts/eval_generation.sh "$models/gpt" "$train_cache" "$models/evaluator" "$ou
   "$clips" > "$out/train-test.log"
 tail -n 40 "$out/train-test/t2m.md"
 
-step "user-style queries"
-"$nec" prepare zoo="$out/locomotion/zoo/seen" zoo_other="$out/other/zoo/seen" cmu=/usr/share/assimp/models/BVH \
-  --creature cmu=person -o "$out/queries-cache" --quiet
-python3 scripts/eval_queries.py "$out/queries-cache" --evaluator "$models/evaluator" | tee "$out/queries.md"
-if [ -n "$baseline" ]; then
-  python3 scripts/eval_queries.py "$out/queries-cache" --evaluator "$baseline/evaluator" | tee "$out/queries-baseline.md"
-fi
+step "user-style queries and near actions"
+"$nec" zoo --out "$out/queries-zoo" --creatures 96 --clips-per-creature 8 --seed 99 --quiet --force
+"$nec" prepare zoo="$out/queries-zoo/seen" cmu=/usr/share/assimp/models/BVH --creature cmu=person \
+  -o "$out/queries-cache" --quiet
+for set in queries queries_heldout; do
+  python3 scripts/eval_queries.py "$out/queries-cache" --queries "benchmarks/data/$set.tsv" --evaluator "$models/evaluator" \
+    | tee "$out/$set.md"
+  python3 scripts/eval_queries.py "$out/queries-cache" --queries "benchmarks/data/$set.tsv" --evaluator "$models/evaluator" \
+    --caption-weight 0 > "$out/$set-motions.md"
+  if [ -n "$baseline" ]; then
+    python3 scripts/eval_queries.py "$out/queries-cache" --queries "benchmarks/data/$set.tsv" --evaluator "$baseline/evaluator" \
+      > "$out/$set-baseline.md"
+  fi
+done
+"$nec" zoo --out "$out/near-zoo" --plans biped,quadruped,bird,dragon,ungulate \
+  --actions walk,trot,run,gallop,sit,lie_down,fly,glide,flap_wings,take_off --creatures 40 --clips-per-creature 8 --seed 99 \
+  --quiet --force
+"$nec" prepare zoo="$out/near-zoo/seen" -o "$out/near-cache" --quiet
+python3 scripts/confusion_table.py "$out/near-cache" --evaluator "$models/evaluator" | tee "$out/confusion.md"
 
 {
   for entry in "${families[@]}"; do
@@ -100,7 +114,12 @@ fi
     echo "## vertical range, the baseline's GPT"; echo; cat "$out/vertical_range-baseline.md"; echo
   fi
   echo "## training cache, test split"; echo; cat "$out/train-test/t2m.md"; echo
-  echo "## queries"; echo; head -n 2 "$out/queries.md"
-  [ -n "$baseline" ] && { echo; echo "baseline:"; head -n 2 "$out/queries-baseline.md"; }
+  for set in queries queries_heldout; do
+    echo "## $set (blended with the captions; by the motions alone)"; echo
+    head -n 2 "$out/$set.md"; sed -n 2p "$out/$set-motions.md"
+    [ -n "$baseline" ] && { echo; echo "baseline:"; head -n 2 "$out/$set-baseline.md"; }
+    echo
+  done
+  echo "## near actions"; echo; cat "$out/confusion.md"
 } > "$out/summary.md"
 step "done in $(( (SECONDS - started) / 60 )) min: $out/summary.md"

@@ -146,6 +146,17 @@ TEST_F(CliEvaluator, RetrievalEvaluationAndQueries) {
   EXPECT_TRUE(contains(missing.output, "nec train evaluator")) << missing.output;
   const CommandResult both = run_nec("retrieve \"a dog\" --motion x.bvh --db " + cache() + " --evaluator " + best);
   EXPECT_EQ(both.exit_code, 2) << both.output;
+  // By the captions alone (--caption-weight 1) a clip's own long caption finds that clip first.
+  const DatasetCache db = read_cache(cache());
+  const CacheClip& asked = db.clips.at(db.clips.size() / 2);
+  ASSERT_FALSE(asked.captions.empty());
+  const CommandResult by_caption = run_nec("retrieve \"" + asked.captions.back() + "\" --db " + cache() + " --evaluator " +
+                                           best + " -k 1 --caption-weight 1");
+  ASSERT_EQ(by_caption.exit_code, 0) << by_caption.output;
+  EXPECT_TRUE(contains(by_caption.output, "| 1 | ") && contains(by_caption.output, "| " + asked.id + " |")) << by_caption.output;
+  const CommandResult weight = run_nec(query + " --caption-weight 1.5");
+  EXPECT_EQ(weight.exit_code, 2) << weight.output;
+  EXPECT_TRUE(contains(weight.output, "--caption-weight must be in [0, 1]")) << weight.output;
 
   // A clip of the cache's own files finds captions.
   const std::string clip = shared_folder() / "zoo/seen";

@@ -24,6 +24,7 @@
 #include <nlohmann/json.hpp>
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -140,6 +141,37 @@ TEST(ContrastiveLoss, MatchesItsClosedForm) {
   // Swapping the texts of two distinct pairs raises the loss.
   const at::Tensor swapped = torch::tensor({{0.0f, 1.0f}, {1.0f, 0.0f}});
   EXPECT_GT(evaluator::contrastive_loss(e, swapped, torch::tensor(5.0), diagonal).item<double>(), 4.0);
+}
+
+TEST(CaptionTeacherLoss, IsZeroWhereTheHeadKeepsTheTeachersSimilaritiesAndMatchesItsClosedForm) {
+  const double temperature = 0.5, r = 1.0 / std::sqrt(2.0);
+  const auto loss = [&](const at::Tensor& text, const at::Tensor& teacher) {
+    return evaluator::caption_teacher_loss(text, teacher, temperature).item<double>();
+  };
+  const at::Tensor teacher = torch::tensor({{1.0, 0.0}, {0.0, 1.0}, {r, r}}, torch::kDouble);
+  EXPECT_NEAR(loss(teacher, teacher), 0.0, 1e-9);
+  // The head may be any rotation of the teacher, in another width: only the similarities count.
+  const at::Tensor turn = torch::tensor({{0.6, 0.8, 0.0}, {-0.8, 0.6, 0.0}}, torch::kDouble);
+  EXPECT_NEAR(loss(teacher.matmul(turn), teacher), 0.0, 1e-9);
+  // A head that says the three captions are one: each row's head distribution is even over the other two.
+  // The teacher's rows 0 and 1 put softmax(0, r / T) on their others, row 2 even: KL = sum p log(2 p).
+  const at::Tensor one = torch::full({3, 2}, r, torch::kDouble);
+  const double high = 1.0 / (1.0 + std::exp(-r / temperature)), low = 1.0 - high;
+  const double row = high * std::log(2.0 * high) + low * std::log(2.0 * low);
+  EXPECT_NEAR(loss(one, teacher), 2.0 * row / 3.0, 1e-9);
+  EXPECT_GT(row, 0.01);
+  // Gradient steps on a free head bring it to the teacher's similarities.
+  at::Tensor free = torch::randn({3, 4}, torch::kDouble).requires_grad_(true);
+  torch::optim::Adam adam({free}, torch::optim::AdamOptions(0.05));
+  const double first = loss(torch::nn::functional::normalize(free, torch::nn::functional::NormalizeFuncOptions().dim(1)), teacher);
+  for (int step = 0; step < 300; ++step) {
+    adam.zero_grad();
+    const at::Tensor unit = torch::nn::functional::normalize(free, torch::nn::functional::NormalizeFuncOptions().dim(1));
+    evaluator::caption_teacher_loss(unit, teacher, temperature).backward();
+    adam.step();
+  }
+  const double last = loss(torch::nn::functional::normalize(free, torch::nn::functional::NormalizeFuncOptions().dim(1)), teacher);
+  EXPECT_LT(last, 1e-3) << "from " << first;
 }
 
 TEST(MotionEncoder, AClipsEmbeddingDoesNotDependOnWhatItIsBatchedWith) {
@@ -304,6 +336,16 @@ TEST_F(EvaluatorTest, TheRetrievalIndexIsStoredOnceAndRebuiltForAnotherEvaluator
   EXPECT_TRUE(first.built && first.stored) << first.note;
   EXPECT_EQ(first.index.clips.size(), cache.clips.size());
   EXPECT_EQ(first.index.captions.size(), 6u);  // six distinct captions
+  // Each clip's captions, and their sentence-encoder vectors.
+  ASSERT_EQ(first.index.clip_captions.size(), cache.clips.size());
+  for (size_t clip = 0; clip < cache.clips.size(); ++clip) {
+    ASSERT_EQ(first.index.clip_captions[clip].size(), cache.clips[clip].captions.size());
+    for (size_t c = 0; c < cache.clips[clip].captions.size(); ++c) {
+      EXPECT_EQ(first.index.captions[static_cast<size_t>(first.index.clip_captions[clip][c])], cache.clips[clip].captions[c]);
+    }
+  }
+  EXPECT_EQ(first.index.text_dim, 512);
+  EXPECT_EQ(first.index.caption_texts.size(), 6u * 512);
   const evaluator::OpenedIndex second = open();
   EXPECT_FALSE(second.built);
   EXPECT_EQ(second.index.clip_embeddings, first.index.clip_embeddings);
@@ -314,6 +356,14 @@ TEST_F(EvaluatorTest, TheRetrievalIndexIsStoredOnceAndRebuiltForAnotherEvaluator
   const std::vector<evaluator::Match> top = second.index.nearest_clips(query, 1, {});
   ASSERT_EQ(top.size(), 1u);
   EXPECT_NEAR(top[0].score, query.matmul(session.embed_clips(cache, {second.index.clips[top[0].row]}).t()).item<float>(), 1e-5);
+  // By the caption texts alone, each distinct caption finds a clip that has it.
+  for (const std::string& caption : second.index.captions) {
+    const evaluator::CaptionBlend blend{evaluator::caption_text_vectors({caption}, "query"), 1.f};
+    const std::vector<evaluator::Match> by_text = second.index.nearest_clips(session.embed_captions({caption}, "query"), 1, {}, blend);
+    ASSERT_EQ(by_text.size(), 1u);
+    const std::vector<std::string>& has = cache.clips[static_cast<size_t>(second.index.clips[by_text[0].row])].captions;
+    EXPECT_NE(std::find(has.begin(), has.end(), caption), has.end()) << caption;
+  }
   // Another evaluator: another key, a new index.
   trainer.step(2);
   trainer.save(dir / "eval", 2);
@@ -474,6 +524,28 @@ TEST(EvaluatorTrainConfig, UnknownFieldsAreNamedAndOnlyTheCadenceMayChangeOnResu
   }
   const std::set<std::string> may_change = train::fields_that_may_change<EvaluatorTrainConfig>();
   EXPECT_EQ(may_change, (std::set<std::string>{"steps", "log_every", "validate_every", "checkpoint_every"}));
+}
+
+TEST(EvaluatorTrainConfig, TheCaptionTeacherNeedsTheSentenceEncoder) {
+  EvaluatorTrainConfig config = evaluator::read_evaluator_train_config(
+      (fs::path(__FILE__).parent_path().parent_path() / "configs" / "evaluator_cpu.json").string());
+  ASSERT_EQ(config.model.text.backbone, text::kUseLiteBackbone);
+  config.captions.teacher_weight = 0.5;
+  EXPECT_NO_THROW(config.validate());
+  config.model.text.backbone = text::kPiecesBackbone;
+  config.model.text.word_dim = 100;
+  config.model.text.layers = 1;
+  try {
+    config.validate();
+    FAIL() << "a teacher for the pieces backbone";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("captions.teacher_weight"), std::string::npos) << e.what();
+  }
+  config.model.text.backbone = text::kUseLiteBackbone;
+  config.model.text.word_dim = 0;
+  config.model.text.layers = 0;
+  config.captions.teacher_temperature = 0;
+  EXPECT_THROW(config.validate(), std::invalid_argument);
 }
 
 TEST(EvaluatorTrainConfig, TheShippedConfigReadsAndWritesBackItsOwnValues) {

@@ -144,6 +144,9 @@ evaluator::RetrievalIndex hand_index() {
   index.clip_embeddings = {1, 0, 0, 0, 1, 0, 0.6f, 0.8f, 0};
   index.captions = {"a dog walks", "a spider crawls"};
   index.caption_embeddings = {0, 0, 1, 1, 0, 0};
+  index.text_dim = 2;
+  index.caption_texts = {1, 0, 0, 1};
+  index.clip_captions = {{0}, {1}, {}};  // clip 9 has no caption
   return index;
 }
 
@@ -165,6 +168,38 @@ TEST(RetrievalIndex, NearestRowsComeBestFirstAndFiltersApply) {
   EXPECT_THROW(index.nearest_clips(torch::ones({1, 4}), 1, {}), std::invalid_argument);
 }
 
+TEST(RetrievalIndex, CaptionTextsReorderTheMotionsByTheirWeight) {
+  const evaluator::RetrievalIndex index = hand_index();
+  // Motions: clip 7 (row 1) 1.0, clip 9 (row 2) 0.8, clip 4 (row 0) 0. The query's text is the first caption's
+  // ("a dog walks", clip 4's).
+  const at::Tensor motion_query = torch::tensor({{0.0f, 1.0f, 0.0f}});
+  evaluator::CaptionBlend blend{torch::tensor({{1.0f, 0.0f}}), 0.f};
+  EXPECT_EQ(index.nearest_clips(motion_query, 1, {}, blend)[0].row, 1);  // weight 0: the motions alone
+  // Standardized over the three clips, motion (0, 1, 0.8) -> (-1.39, 0.93, 0.46); the captions of the captioned
+  // clips (1, 0) -> (1, -1); clip 9, without captions, takes its motion score for both parts.
+  blend.weight = 1.f;
+  std::vector<evaluator::Match> top = index.nearest_clips(motion_query, 3, {}, blend);
+  ASSERT_EQ(top.size(), 3u);
+  EXPECT_EQ(top[0].row, 0);
+  EXPECT_NEAR(top[0].score, 1.f, 1e-5);
+  EXPECT_EQ(top[1].row, 2);
+  EXPECT_EQ(top[2].row, 1);
+  // At equal weight: clip 4 0.5 (-1.39 + 1) = -0.19, clip 7 0.5 (0.93 - 1) = -0.04, clip 9 0.46.
+  blend.weight = 0.5f;
+  top = index.nearest_clips(motion_query, 3, {}, blend);
+  ASSERT_EQ(top.size(), 3u);
+  EXPECT_EQ(top[0].row, 2);
+  EXPECT_NEAR(top[0].score, 0.2 / std::sqrt(0.56 / 3), 1e-5);
+  EXPECT_EQ(top[1].row, 1);
+  EXPECT_NEAR(top[1].score, 0.5 * (0.4 / std::sqrt(0.56 / 3) - 1), 1e-5);
+  EXPECT_EQ(top[2].row, 0);
+  blend.weight = 1.5f;
+  EXPECT_THROW(index.nearest_clips(motion_query, 1, {}, blend), std::invalid_argument);
+  blend.weight = 0.5f;
+  blend.text = torch::ones({1, 3});
+  EXPECT_THROW(index.nearest_clips(motion_query, 1, {}, blend), std::invalid_argument);
+}
+
 TEST(RetrievalIndex, BytesRoundTripAndDamageIsRefused) {
   const evaluator::RetrievalIndex index = hand_index();
   const std::string bytes = evaluator::serialize(index);
@@ -173,6 +208,9 @@ TEST(RetrievalIndex, BytesRoundTripAndDamageIsRefused) {
   EXPECT_EQ(back.clip_embeddings, index.clip_embeddings);
   EXPECT_EQ(back.captions, index.captions);
   EXPECT_EQ(back.caption_embeddings, index.caption_embeddings);
+  EXPECT_EQ(back.text_dim, index.text_dim);
+  EXPECT_EQ(back.caption_texts, index.caption_texts);
+  EXPECT_EQ(back.clip_captions, index.clip_captions);
   EXPECT_EQ(back.cache_key, 11u);
   EXPECT_EQ(back.evaluator_key, 22u);
   EXPECT_EQ(evaluator::serialize(back), bytes);

@@ -54,6 +54,10 @@ void EvaluatorTrainConfig::validate() const {
   } catch (const std::invalid_argument& e) {
     require(false, std::string("captions.synonyms.") + e.what());
   }
+  require(captions.teacher_weight >= 0, "captions.teacher_weight must be >= 0");
+  require(captions.teacher_temperature > 0, "captions.teacher_temperature must be > 0");
+  require(captions.teacher_weight == 0 || model.text.backbone == text::kUseLiteBackbone,
+          "captions.teacher_weight needs the text backbone \"use-lite\" (the teacher is its sentence encoder)");
   require(steps >= 1 && batch_size >= 2, "steps must be >= 1 and batch_size >= 2");
   require(data.window_frames <= model.motion.max_frames(),
           "data.window_frames must be at most model.motion.max_frames() = " + std::to_string(model.motion.max_frames()));
@@ -64,6 +68,9 @@ void visit_fields(train::ConfigVisitor& v, CaptionAugmentConfig& c) {
   v.added_field("synonym_probability", c.synonym_probability,
           "chance that a train caption word is replaced by one of its word-vector synonyms; 0 = off");
   v.object("synonyms", c.synonyms, "which word-vector neighbours count as synonyms");
+  v.added_field("teacher_weight", c.teacher_weight,
+                "weight of the sentence encoder's caption-to-caption similarities as a teacher of the head; 0 = off");
+  v.added_field("teacher_temperature", c.teacher_temperature, "temperature of those similarities");
 }
 
 void visit_fields(train::ConfigVisitor& v, EvaluatorTrainConfig& c) {
@@ -91,11 +98,26 @@ at::Tensor contrastive_loss(const at::Tensor& motion, const at::Tensor& text, co
   return 0.5 * (motion_to_text + text_to_motion);
 }
 
-at::Tensor contrastive_batch_loss(EvaluatorImpl& model, const ContrastiveBatch& batch) {
+at::Tensor caption_teacher_loss(const at::Tensor& text, const at::Tensor& teacher, double temperature) {
+  const int64_t batch = text.size(0);
+  const at::Tensor others = ~torch::eye(batch, torch::TensorOptions().dtype(torch::kBool).device(text.device()));
+  const auto row_distribution = [&](const at::Tensor& rows) {
+    const at::Tensor similarities = rows.matmul(rows.t()) / temperature;
+    return torch::log_softmax(similarities.masked_fill(~others, -1e9), 1);
+  };
+  const at::Tensor target = row_distribution(teacher.detach().to(text.scalar_type()));
+  const at::Tensor head = row_distribution(text);
+  return (target.exp() * (target - head)).masked_fill(~others, 0).sum(1).mean();
+}
+
+at::Tensor contrastive_batch_loss(EvaluatorImpl& model, const ContrastiveBatch& batch, double teacher_weight,
+                                  double teacher_temperature) {
   const at::Tensor motion =
       model.embed_motion(batch.features, batch.joint_mask, batch.frame_mask, batch.joint_embeddings);
   const at::Tensor text = model.embed_text(batch.captions);
-  return contrastive_loss(motion, text, model.logit_scale(), batch.same);
+  const at::Tensor loss = contrastive_loss(motion, text, model.logit_scale(), batch.same);
+  if (teacher_weight <= 0) return loss;
+  return loss + teacher_weight * caption_teacher_loss(text, batch.captions.encoder_sentence, teacher_temperature);
 }
 
 std::vector<int> captioned_clips(const DatasetCache& cache, Split split) {
@@ -197,7 +219,8 @@ train::LossTerms EvaluatorTrainer::step(int64_t step) {
     const at::Tensor id_tensor = torch::tensor(ids, torch::kInt64);
     const at::Tensor same = id_tensor.unsqueeze(1) == id_tensor.unsqueeze(0);
     const ContrastiveBatch inputs{x.features, x.joint_mask, x.frame_mask, joints, captions.to(device_), same.to(device_)};
-    const at::Tensor loss = contrastive_batch_loss(*model_, inputs);
+    const at::Tensor loss = contrastive_batch_loss(*model_, inputs, config_.captions.teacher_weight,
+                                                   config_.captions.teacher_temperature);
     (loss * share).backward();
     loss_value = loss.item<double>() * share;
   }

@@ -77,6 +77,10 @@ namespace nec::evaluator {
 struct CaptionAugmentConfig {
   double synonym_probability = 0.0;  // per word, e.g. 0.25; 0 = off
   text::SynonymOptions synonyms;     // which neighbours count as synonyms
+  // The frozen sentence encoder as a teacher of the caption space (backbone "use-lite"): weight of
+  // caption_teacher_loss beside the contrastive loss (0 = off), and its temperature.
+  double teacher_weight = 0.0;
+  double teacher_temperature = 0.05;
 };
 void visit_fields(train::ConfigVisitor& v, CaptionAugmentConfig& c);
 
@@ -107,6 +111,12 @@ EvaluatorTrainConfig read_evaluator_train_config(const std::string& path);
 at::Tensor contrastive_loss(const at::Tensor& motion, const at::Tensor& text, const at::Tensor& scale,
                             const at::Tensor& same);
 
+// How far the text head's caption-to-caption similarities within a batch are from the frozen sentence
+// encoder's: text (B, D) and teacher (B, T) unit rows; each row's similarities to the other captions, divided
+// by `temperature`, as distributions (softmax over j != i), KL(teacher || head) averaged over the rows. So
+// that words the captions never used land where the encoder puts them. -> ()
+at::Tensor caption_teacher_loss(const at::Tensor& text, const at::Tensor& teacher, double temperature);
+
 // What one contrastive step reads: EvaluatorTrainer::step makes it from its
 // batch (the OwO embeddings of its skeletons, its captions read), synthetic.h
 // from torch's generator.
@@ -121,8 +131,11 @@ struct ContrastiveBatch {
 
 // The training loss of `model` (in the mode it is in) on `batch`: the motions
 // embedded, then the captions (the order of their dropout draws), and
-// contrastive_loss at the model's logit scale. -> ()
-at::Tensor contrastive_batch_loss(EvaluatorImpl& model, const ContrastiveBatch& batch);
+// contrastive_loss at the model's logit scale; plus teacher_weight x
+// caption_teacher_loss against the batch's encoder sentence vectors when
+// teacher_weight > 0. -> ()
+at::Tensor contrastive_batch_loss(EvaluatorImpl& model, const ContrastiveBatch& batch, double teacher_weight = 0.0,
+                                  double teacher_temperature = 0.05);
 
 class EvaluatorTrainer {
  public:
