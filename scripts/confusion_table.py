@@ -2,7 +2,7 @@
 """Within a body plan, which action `nec retrieve` finds for a caption of each action: a confusion table per plan.
 
     nec zoo --out out/near/zoo --plans biped,quadruped,bird,dragon,ungulate \
-        --actions walk,trot,run,gallop,sit,lie_down,fly,glide,flap_wings,take_off --creatures 40 --clips-per-creature 8 --seed 99
+        --actions walk,trot,run,gallop,sit,lie_down,fly,glide,flap_wings,take_off --creatures 80 --clips-per-creature 8 --seed 99
     nec prepare zoo=out/near/zoo/seen -o out/near/cache
     python3 scripts/confusion_table.py out/near/cache [--evaluator DIR] [--caption-weight W]
 

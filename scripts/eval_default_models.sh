@@ -96,7 +96,7 @@ for set in queries queries_heldout; do
   fi
 done
 "$nec" zoo --out "$out/near-zoo" --plans biped,quadruped,bird,dragon,ungulate \
-  --actions walk,trot,run,gallop,sit,lie_down,fly,glide,flap_wings,take_off --creatures 40 --clips-per-creature 8 --seed 99 \
+  --actions walk,trot,run,gallop,sit,lie_down,fly,glide,flap_wings,take_off --creatures 80 --clips-per-creature 8 --seed 99 \
   --quiet --force
 "$nec" prepare zoo="$out/near-zoo/seen" -o "$out/near-cache" --quiet
 python3 scripts/confusion_table.py "$out/near-cache" --evaluator "$models/evaluator" | tee "$out/confusion.md"
