@@ -16,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <numeric>
 
 namespace nec::evaluator {
 namespace {
@@ -94,23 +95,24 @@ std::vector<Match> RetrievalIndex::nearest_clips(const at::Tensor& query, int k,
   if (clip_captions.size() != clips.size()) throw std::invalid_argument("the retrieval index has no clip captions");
   at::Tensor holder;
   const std::vector<float> caption_scores = row_dots(caption_texts, text_dim, query_values(blend.text, text_dim, holder));
-  std::vector<float> motion(scored.size()), nearest_caption(scored.size());
-  std::vector<size_t> all, captioned;
+  std::vector<float> motion(scored.size()), text(scored.size());
+  std::vector<size_t> all(scored.size()), captioned;
+  std::iota(all.begin(), all.end(), size_t{0});
   for (size_t i = 0; i < scored.size(); ++i) {
     motion[i] = scored[i].score;
-    all.push_back(i);
     const std::vector<int>& rows = clip_captions[static_cast<size_t>(scored[i].row)];
     if (rows.empty()) continue;
-    float best = -2.f;
-    for (const int row : rows) best = std::max(best, caption_scores[static_cast<size_t>(row)]);
-    nearest_caption[i] = best;
+    text[i] = -2.f;
+    for (const int row : rows) text[i] = std::max(text[i], caption_scores[static_cast<size_t>(row)]);
     captioned.push_back(i);
   }
   standardize(motion, all);
-  standardize(nearest_caption, captioned);
-  std::vector<float> caption_part = motion;  // a clip without captions: its motion alone
-  for (const size_t i : captioned) caption_part[i] = nearest_caption[i];
-  for (size_t i = 0; i < scored.size(); ++i) scored[i].score = (1.f - blend.weight) * motion[i] + blend.weight * caption_part[i];
+  standardize(text, captioned);
+  for (size_t i = 0; i < scored.size(); ++i) {
+    const bool has_captions = !clip_captions[static_cast<size_t>(scored[i].row)].empty();
+    const float caption_part = has_captions ? text[i] : motion[i];  // a clip without captions: its motion alone
+    scored[i].score = (1.f - blend.weight) * motion[i] + blend.weight * caption_part;
+  }
   return best_of(std::move(scored), k);
 }
 

@@ -127,12 +127,14 @@ int run_local_workers(const std::string& program, const std::vector<std::string>
           const size_t others = left;  // still running when this failure was seen
           size_t cause = r;
           int cause_status = status;
-          for (size_t o = 0; o < workers.size() && WIFEXITED(status); ++o) {
-            int other = 0;
-            if (!running[o] || ::waitpid(workers[o], &other, WNOHANG) != workers[o]) continue;
-            running[o] = false;
-            --left;
-            if (WIFSIGNALED(other)) cause = o, cause_status = other;
+          if (WIFEXITED(status)) {
+            for (size_t o = 0; o < workers.size(); ++o) {
+              int other = 0;
+              if (!running[o] || ::waitpid(workers[o], &other, WNOHANG) != workers[o]) continue;
+              running[o] = false;
+              --left;
+              if (WIFSIGNALED(other)) cause = o, cause_status = other;
+            }
           }
           std::fprintf(log, "nec: rank %zu %s; stopping the other %zu rank(s)\n", cause, describe(cause_status).c_str(),
                        others);
